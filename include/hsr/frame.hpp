@@ -1,0 +1,53 @@
+// The visibility buffer every algorithm fills — per pixel: face id, world triangle id, eye depth
+// and colour — and the statistics every algorithm reports (keys of CONVENTIONS.md).
+// Produced by render(); consumed by the writers (io.hpp), --verify and compare.
+#pragma once
+#include <hsr/common.hpp>
+
+#include <limits>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace hsr {
+
+/// Counters and timings of one frame. Counts are exact integers; times in milliseconds.
+struct Stats {
+  std::string algorithm;
+  int width = 0, height = 0;
+  uint64_t faces = 0;              // polygons in the scene
+  uint64_t triangles = 0;          // triangles in the scene's triangulation
+  uint64_t triangles_clipped = 0;  // triangles that crossed a clipping plane and were clipped
+  uint64_t triangles_degenerate = 0;  // zero area after snapping to the sub-pixel grid: not drawn
+  uint64_t culled_backface = 0;
+  uint64_t culled_frustum = 0;     // triangles rejected as wholly outside the view
+  uint64_t culled_occlusion = 0;
+  uint64_t depth_tests = 0;        // z comparisons
+  uint64_t depth_writes = 0;
+  uint64_t color_writes = 0;
+  uint64_t covered_pixels = 0;     // pixels showing a surface in the final image
+  uint64_t memory_bytes = 0;       // all per-frame buffers and structures
+  std::string depth_format;        // e.g. "f32:reversed" (empty for algorithms without one)
+  std::vector<std::pair<std::string, double>> time_ms;  // stage -> ms, in pipeline order
+  std::optional<uint64_t> wrong_pixels, ambiguous_pixels;  // with --verify
+
+  double overdraw() const { return covered_pixels ? double(color_writes) / double(covered_pixels) : 0.0; }
+  void addTime(const std::string& stage, double ms);
+  /// The statistics as one JSON object (CONVENTIONS.md keys plus a few more).
+  std::string toJson(int indent = 2) const;
+};
+
+struct Frame {
+  int width = 0, height = 0;
+  std::vector<int32_t> faceId;      // face index, -1 background; row 0 = top
+  std::vector<int32_t> triangleId;  // index into Scene::triangles, -1 background
+  std::vector<float> depth;         // eye-space depth, +inf background
+  std::vector<Rgba8> color;         // shaded colour, background colour where empty
+  Stats stats;
+
+  void resize(int w, int h, Rgba8 background);
+  size_t index(int x, int y) const { return size_t(y) * size_t(width) + size_t(x); }
+};
+
+}  // namespace hsr

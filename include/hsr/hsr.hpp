@@ -1,0 +1,10 @@
+// hsr: hidden-surface removal toolkit. Include this one header for the whole public API.
+#pragma once
+#include <hsr/builtin.hpp>
+#include <hsr/camera.hpp>
+#include <hsr/common.hpp>
+#include <hsr/depth_format.hpp>
+#include <hsr/frame.hpp>
+#include <hsr/io.hpp>
+#include <hsr/render.hpp>
+#include <hsr/scene.hpp>

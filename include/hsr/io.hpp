@@ -1,0 +1,33 @@
+// Files in and out: scene loading (mesh files, scene JSON, builtin:NAME) and the image writers
+// of CONVENTIONS.md. Every writer writes a temporary file beside the target and renames it, so
+// a failure never leaves half a file. Errors: InputError "file[:line]: problem".
+#pragma once
+#include <hsr/frame.hpp>
+#include <hsr/scene.hpp>
+
+#include <string>
+
+namespace hsr {
+
+/// Loads a scene: "builtin:NAME[?k=v&...]", a scene JSON (.json), OBJ, PLY, STL, OFF (own
+/// loaders: double precision, file order, file:line errors) or anything else assimp reads
+/// (glTF/GLB, ...). The returned scene is finalized.
+Scene loadScene(const std::string& path);
+
+/// Writers. The format follows the extension where there is a choice.
+void writeColorPng(const Frame& frame, const std::string& path);
+void writeFaceIds(const Frame& frame, const std::string& path);     // .png (24-bit id+1) or .npy (int32)
+void writeDepth(const Frame& frame, const std::string& path);       // .npy .pfm .exr .f32
+void writeDepthImage(const Frame& frame, const std::string& path);  // .png grey, near white
+void writeTextFile(const std::string& text, const std::string& path);
+
+/// The files the writers above produce, for checking paths before any work is done.
+enum class OutputKind : uint8_t { Color, FaceIds, Depth, DepthImage };
+/// Throws InputError "path: ..." naming the allowed extensions when the writer for `kind` does
+/// not know `path`'s extension (the writers check the same way).
+void checkOutputPath(OutputKind kind, const std::string& path);
+
+/// Writes `bytes` to `path` atomically (temporary file + rename). Throws std::runtime_error.
+void writeFileAtomic(const std::string& path, const void* bytes, size_t size);
+
+}  // namespace hsr

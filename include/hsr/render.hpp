@@ -1,0 +1,67 @@
+// The public entry point: render a scene with a camera and one of the visibility algorithms
+// into a Frame (visibility buffer + statistics), and verify it against the exact reference.
+//
+// Conventions, stated once (details in docs/conventions.md and ../shared/CONVENTIONS.md):
+//  - world space right-handed; camera space x right, y down, z forward; eye depth = camera z;
+//  - pixel (x, y) centre at (x + .5, y + .5), row 0 at the top; a triangle covers a pixel when
+//    the centre is inside, centres on an edge follow the top-left rule;
+//  - vertices snap to 1/256 pixel (8 sub-pixel bits) before coverage is decided;
+//  - depth test: strictly nearer wins, so on ties the triangle drawn first stays;
+//  - faces are two-sided unless cull = back/front (front = counter-clockwise as seen).
+#pragma once
+#include <hsr/camera.hpp>
+#include <hsr/depth_format.hpp>
+#include <hsr/frame.hpp>
+#include <hsr/scene.hpp>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace hsr {
+
+enum class Cull : uint8_t { None, Back, Front };
+enum class Shading : uint8_t { Flat, Lambert, FaceId };
+enum class RasterKind : uint8_t { HalfSpace, Scanline };
+
+struct RenderOptions {
+  std::string algorithm = "zbuffer";
+  DepthFormat depthFormat;               // default f32:reversed
+  RasterKind raster = RasterKind::HalfSpace;
+  Cull cull = Cull::None;
+  Shading shading = Shading::Lambert;
+  Rgba8 background{0, 0, 0, 255};
+  int threads = 0;                        // 0: all cores
+  bool verify = false;                    // also render the reference and count wrong pixels
+};
+
+/// Renders `scene` (finalized) seen by `camera` with options.algorithm.
+/// Throws InputError for an unknown algorithm or bad options.
+Frame render(const Scene& scene, const Camera& camera, const RenderOptions& options);
+
+/// A visibility algorithm: fills frame.faceId/triangleId/depth/color and frame.stats.
+using AlgorithmFn = std::function<void(const Scene&, const Camera&, const RenderOptions&, Frame&)>;
+struct AlgorithmInfo {
+  std::string name;
+  std::string summary;
+  AlgorithmFn run;
+};
+/// All algorithms, in the order `hsr help render` lists them.
+const std::vector<AlgorithmInfo>& algorithms();
+const AlgorithmInfo* findAlgorithm(const std::string& name);
+
+/// Result of comparing a frame with the exact reference.
+struct VerifyResult {
+  uint64_t wrong_pixels = 0;      // face id differs and the difference is not explained below
+  uint64_t ambiguous_pixels = 0;  // face id differs, but the two surfaces are closer in depth
+                                  // than the format separates there, or the pixel centre lies
+                                  // within 1/128 pixel of an edge of either triangle
+  std::vector<std::pair<int, int>> firstWrong;  // up to 16 wrong pixels (x, y), for messages
+};
+/// Compares `frame` (rendered with `options`) against `reference` (the raycast of the same
+/// scene and camera) and classifies each differing pixel.
+VerifyResult verifyAgainstReference(const Scene& scene, const Camera& camera,
+                                    const RenderOptions& options, const Frame& frame,
+                                    const Frame& reference);
+
+}  // namespace hsr

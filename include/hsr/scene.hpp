@@ -1,0 +1,75 @@
+// Scenes: polygons in world space, kept as polygons (list-priority algorithms split polygons),
+// with the triangulation every rasterizer consumes. Produced by the loaders (io.hpp) and the
+// built-in generators (builtin.hpp); consumed by the front end and every algorithm.
+#pragma once
+#include <hsr/camera.hpp>
+#include <hsr/common.hpp>
+
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace hsr {
+
+/// One triangle of the triangulation. `face` is the index of the polygon it came from
+/// (CONVENTIONS.md: the face index is the polygon's position in file order).
+struct Triangle {
+  uint32_t v[3];
+  uint32_t face;
+};
+
+/// A named group of consecutive faces (a mesh of the input file or of a scene JSON).
+struct MeshRange {
+  std::string name;
+  uint32_t firstFace = 0;
+  uint32_t faceCount = 0;
+};
+
+/// What the loader or finalize() found wrong and how it was handled. Counted, never fatal:
+/// fatal problems (NaN, indices out of range, truncated files) throw InputError instead.
+struct SceneProblems {
+  uint64_t degenerateFaces = 0;    // fewer than 3 distinct vertices or zero area: not drawn
+  uint64_t nonPlanarFaces = 0;     // polygons whose vertices leave their plane: triangulated anyway
+  uint64_t concaveFaces = 0;       // triangulated by ear clipping
+  std::vector<std::string> notes;  // first few human-readable notes ("face 12: degenerate")
+};
+
+struct Scene {
+  std::string source;  // file name or "builtin:NAME"; used in error messages
+
+  // Polygons. Face f has the vertex indices polygonIndices[polygonOffsets[f] .. polygonOffsets[f+1]).
+  std::vector<dvec3> positions;
+  std::vector<uint32_t> polygonIndices;
+  std::vector<uint32_t> polygonOffsets{0};
+  std::vector<Rgba8> faceColors;  // one per face; alpha = opacity
+  std::vector<MeshRange> meshes;  // in file order, covering all faces
+
+  // Filled by finalize(): the triangulation (faces in order, each face's triangles together;
+  // degenerate faces have none) and the problems found.
+  std::vector<Triangle> triangles;
+  SceneProblems problems;
+
+  std::optional<CameraSpec> camera;  // a camera stored in the scene file, if any
+
+  size_t faceCount() const { return polygonOffsets.size() - 1; }
+  std::span<const uint32_t> face(size_t f) const {
+    return {polygonIndices.data() + polygonOffsets[f], polygonOffsets[f + 1] - polygonOffsets[f]};
+  }
+  /// Appends a polygon (3+ vertex indices into positions) with its colour.
+  void addFace(std::span<const uint32_t> indices, Rgba8 color);
+  void addFace(std::initializer_list<uint32_t> indices, Rgba8 color) {
+    addFace(std::span<const uint32_t>(indices.begin(), indices.size()), color);
+  }
+  /// Starts a new mesh range; faces added afterwards belong to it.
+  void beginMesh(std::string name);
+
+  /// Validates (finite coordinates, indices in range: throws InputError naming `source`) and
+  /// triangulates every polygon (ear clipping in the polygon's best-fit plane, so concave
+  /// polygons are correct). Must be called once all faces are added.
+  void finalize();
+
+  Bounds3 bounds() const;  // of the vertices used by faces
+};
+
+}  // namespace hsr

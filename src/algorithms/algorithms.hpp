@@ -1,0 +1,11 @@
+// The visibility algorithms, one function each, registered in render.cpp. Each fills the whole
+// Frame (visibility buffer + statistics) from a finalized scene and a resolved camera.
+#pragma once
+#include <hsr/render.hpp>
+
+namespace hsr::algo {
+
+void zbuffer(const Scene&, const Camera&, const RenderOptions&, Frame&);  // zbuffer.cpp
+void raycast(const Scene&, const Camera&, const RenderOptions&, Frame&);  // raycast.cpp
+
+}  // namespace hsr::algo

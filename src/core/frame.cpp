@@ -1,0 +1,56 @@
+// Frame buffers and the statistics JSON (keys of CONVENTIONS.md). Consumed by the writers, the
+// CLI (--stats, --json, bench) and the tests.
+#include <hsr/frame.hpp>
+
+#include <limits>
+#include <nlohmann/json.hpp>
+
+namespace hsr {
+
+void Stats::addTime(const std::string& stage, double ms) {
+  for (auto& [k, v] : time_ms)
+    if (k == stage) {
+      v += ms;
+      return;
+    }
+  time_ms.emplace_back(stage, ms);
+}
+
+std::string Stats::toJson(int indent) const {
+  nlohmann::ordered_json j;
+  j["algorithm"] = algorithm;
+  j["width"] = width;
+  j["height"] = height;
+  if (!depth_format.empty()) j["depth_format"] = depth_format;
+  j["faces"] = faces;
+  j["triangles"] = triangles;
+  j["triangles_clipped"] = triangles_clipped;
+  j["triangles_degenerate"] = triangles_degenerate;
+  j["culled_backface"] = culled_backface;
+  j["culled_frustum"] = culled_frustum;
+  j["culled_occlusion"] = culled_occlusion;
+  j["depth_tests"] = depth_tests;
+  j["depth_writes"] = depth_writes;
+  j["color_writes"] = color_writes;
+  j["covered_pixels"] = covered_pixels;
+  j["overdraw"] = overdraw();
+  j["memory_bytes"] = memory_bytes;
+  nlohmann::ordered_json t = nlohmann::ordered_json::object();
+  for (auto& [k, v] : time_ms) t[k] = v;
+  j["time_ms"] = t;
+  if (wrong_pixels) j["wrong_pixels"] = *wrong_pixels;
+  if (ambiguous_pixels) j["ambiguous_pixels"] = *ambiguous_pixels;
+  return j.dump(indent);
+}
+
+void Frame::resize(int w, int h, Rgba8 background) {
+  width = w;
+  height = h;
+  size_t n = size_t(w) * size_t(h);
+  faceId.assign(n, -1);
+  triangleId.assign(n, -1);
+  depth.assign(n, std::numeric_limits<float>::infinity());
+  color.assign(n, background);
+}
+
+}  // namespace hsr

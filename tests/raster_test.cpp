@@ -1,0 +1,263 @@
+// Rasterizer conformance: fill rule and watertightness, coverage against a brute-force exact
+// point-in-triangle test, and agreement of the half-space and scanline rasterizers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+
+#include "frontend/frontend.hpp"
+#include "raster/halfspace.hpp"
+#include "raster/scanline.hpp"
+
+namespace hsr {
+namespace {
+
+constexpr int W = 64, H = 48;
+
+Camera pixelCamera(int w = W, int h = H) {
+  Camera cam;
+  cam.width = w;
+  cam.height = h;
+  cam.near = 0.5;
+  cam.far = 100;
+  return cam;
+}
+
+// Sets up a screen-space triangle (pixel coordinates, eye depths) through the real front end.
+bool setup(const dvec2 p[3], const double depth[3], SetupTriangle& t, FrontEndOutput& counters,
+           int w = W, int h = H) {
+  HVertex v[3];
+  for (int i = 0; i < 3; ++i) v[i] = {p[i].x * depth[i], p[i].y * depth[i], depth[i], depth[i]};
+  return setupTriangle(v, 0, 0, Rgba8{}, pixelCamera(w, h), Cull::None, counters, t);
+}
+
+// Random coordinate with a random number of sub-pixel bits, sometimes exactly on a pixel centre.
+double randomCoord(std::mt19937_64& rng, double lo, double hi) {
+  std::uniform_real_distribution<double> u(lo, hi);
+  double v = u(rng);
+  switch (rng() % 4) {
+    case 0: return std::floor(v) + 0.5;                 // exactly on a pixel centre
+    case 1: return std::round(v * 2) / 2;               // on a pixel corner or centre
+    default: return std::round(v * 256) / 256;          // any sub-pixel position
+  }
+}
+
+// Independent reference: is pixel centre (x, y) inside the snapped triangle? Exact in double
+// (coordinates are multiples of 1/256 below 2^15), with the top-left rule written from its
+// geometric definition rather than from the edge-function bias.
+bool insideReference(const SetupTriangle& t, int x, int y) {
+  double px = x + 0.5, py = y + 0.5;
+  double vx[3], vy[3];
+  for (int i = 0; i < 3; ++i) {
+    vx[i] = t.x[i] / 256.0;
+    vy[i] = t.y[i] / 256.0;
+  }
+  for (int i = 0; i < 3; ++i) {
+    int j = (i + 1) % 3, k = (i + 2) % 3;
+    double side = (vx[j] - vx[i]) * (py - vy[i]) - (vy[j] - vy[i]) * (px - vx[i]);
+    double third = (vx[j] - vx[i]) * (vy[k] - vy[i]) - (vy[j] - vy[i]) * (vx[k] - vx[i]);
+    if (side * third < 0) return false;
+    if (side == 0) {
+      bool horizontal = vy[i] == vy[j];
+      bool top = horizontal && vy[k] > vy[i];  // y down: the third vertex is below
+      bool left = false;
+      if (!horizontal) {  // interior to the right: third vertex right of the edge line at its y
+        double xOnLine = vx[i] + (vx[j] - vx[i]) * (vy[k] - vy[i]) / (vy[j] - vy[i]);
+        left = vx[k] > xOnLine;
+      }
+      if (!top && !left) return false;
+    }
+  }
+  return true;
+}
+
+using Coverage = std::map<std::pair<int, int>, double>;
+
+Coverage rasterize(const SetupTriangle& t, bool scanline) {
+  Coverage c;
+  auto visit = [&](int x, int y, double d) {
+    bool fresh = c.emplace(std::make_pair(x, y), d).second;
+    EXPECT_TRUE(fresh) << "pixel visited twice";
+  };
+  if (scanline) rasterizeScanline(t, visit);
+  else rasterizeHalfSpace(t, visit);
+  return c;
+}
+
+std::vector<std::array<dvec2, 3>> randomTriangles(int count, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<std::array<dvec2, 3>> out;
+  while (int(out.size()) < count) {
+    std::array<dvec2, 3> p;
+    switch (rng() % 5) {
+      case 0:  // sub-pixel
+        p[0] = {randomCoord(rng, -1, W + 1), randomCoord(rng, -1, H + 1)};
+        for (int i = 1; i < 3; ++i) p[i] = p[0] + dvec2(u(rng) - 0.5, u(rng) - 0.5) * 1.5;
+        for (auto& q : p) q = glm::round(q * 256.0) / 256.0;
+        break;
+      case 1: {  // sliver: long and thin, sometimes nearly collinear
+        p[0] = {randomCoord(rng, -4, W + 4), randomCoord(rng, -4, H + 4)};
+        p[1] = {randomCoord(rng, -4, W + 4), randomCoord(rng, -4, H + 4)};
+        dvec2 m = (p[0] + p[1]) * 0.5 + dvec2(u(rng) - 0.5, u(rng) - 0.5) * 0.3;
+        p[2] = glm::round(m * 256.0) / 256.0;
+        break;
+      }
+      case 2:  // huge: far beyond the image, inside the guard band
+        for (auto& q : p) q = {randomCoord(rng, -4000, W + 4000), randomCoord(rng, -4000, H + 4000)};
+        break;
+      default:  // ordinary
+        for (auto& q : p) q = {randomCoord(rng, -8, W + 8), randomCoord(rng, -8, H + 8)};
+    }
+    out.push_back(p);
+  }
+  return out;
+}
+
+TEST(Raster, CoverageMatchesBruteForceOn10000Triangles) {
+  auto tris = randomTriangles(12500, 12345);
+  const double depth[3] = {1, 2, 3};
+  int drawn = 0;
+  for (size_t n = 0; n < tris.size(); ++n) {
+    SetupTriangle t;
+    FrontEndOutput counters;
+    if (!setup(tris[n].data(), depth, t, counters)) continue;
+    ++drawn;
+    for (bool scan : {false, true}) {
+      Coverage c = rasterize(t, scan);
+      size_t expected = 0;
+      for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+          bool in = insideReference(t, x, y);
+          expected += in;
+          ASSERT_EQ(in, c.count({x, y}) == 1) << (scan ? "scanline" : "halfspace") << " triangle " << n << " pixel "
+                                              << x << "," << y;
+        }
+      ASSERT_EQ(expected, c.size());
+    }
+  }
+  EXPECT_GE(drawn, 10000);  // at least 10,000 triangles reached the rasterizers
+}
+
+TEST(Raster, ScanlineAndHalfSpaceAgreeOnDepth) {
+  auto tris = randomTriangles(3000, 777);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(1, 50);
+  for (auto& p : tris) {
+    const double depth[3] = {u(rng), u(rng), u(rng)};
+    SetupTriangle t;
+    FrontEndOutput counters;
+    if (!setup(p.data(), depth, t, counters)) continue;
+    Coverage a = rasterize(t, false), b = rasterize(t, true);
+    ASSERT_EQ(a.size(), b.size());
+    for (auto& [px, d] : a) {
+      ASSERT_TRUE(b.count(px));
+      // Stepping accumulates rounding in double: agree to 1e-9 relative (documented tolerance).
+      EXPECT_NEAR(d, b[px], 1e-9 * d);
+    }
+  }
+}
+
+// A mesh of triangles over a jittered grid: shared edges and vertices at random sub-pixel
+// positions. Every pixel centre inside the outer rectangle is covered exactly once.
+TEST(Raster, WatertightJitteredGrid) {
+  for (uint64_t seed = 1; seed <= 20; ++seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> jitter(-0.25, 0.25);  // small enough that no cell folds
+    const int N = 7;  // grid of N x N cells over [4, 60] x [4, 44]
+    auto gx = [&](int i) { return 4.0 + i * (56.0 / N); };
+    auto gy = [&](int j) { return 4.0 + j * (40.0 / N); };
+    std::vector<dvec2> grid((N + 1) * (N + 1));
+    for (int j = 0; j <= N; ++j)
+      for (int i = 0; i <= N; ++i) {
+        dvec2 p{gx(i), gy(j)};
+        if (i > 0 && i < N) p.x += jitter(rng) * (56.0 / N);
+        if (j > 0 && j < N) p.y += jitter(rng) * (40.0 / N);
+        if (rng() % 3 == 0) p = glm::floor(p) + 0.5;  // some vertices exactly on pixel centres
+        grid[j * (N + 1) + i] = glm::round(p * 256.0) / 256.0;
+      }
+    for (bool scan : {false, true}) {
+      std::vector<int> count(W * H, 0);
+      const double depth[3] = {1, 1, 1};
+      for (int j = 0; j < N; ++j)
+        for (int i = 0; i < N; ++i) {
+          dvec2 a = grid[j * (N + 1) + i], b = grid[j * (N + 1) + i + 1];
+          dvec2 c = grid[(j + 1) * (N + 1) + i], d = grid[(j + 1) * (N + 1) + i + 1];
+          // Alternate the diagonal and the winding so both orientations are exercised.
+          std::array<std::array<dvec2, 3>, 2> pair =
+              (i + j) % 2 ? std::array<std::array<dvec2, 3>, 2>{{{a, b, d}, {a, d, c}}}
+                          : std::array<std::array<dvec2, 3>, 2>{{{a, c, b}, {b, c, d}}};
+          for (auto& tri : pair) {
+            SetupTriangle t;
+            FrontEndOutput counters;
+            if (!setup(tri.data(), depth, t, counters)) continue;
+            for (auto& [px, dd] : rasterize(t, scan)) ++count[px.second * W + px.first];
+          }
+        }
+      for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+          double cx = x + 0.5, cy = y + 0.5;
+          bool strictlyInside = cx > 4 && cx < 60 && cy > 4 && cy < 44;
+          bool outside = cx < 4 || cx > 60 || cy < 4 || cy > 44;
+          if (strictlyInside) ASSERT_EQ(count[y * W + x], 1) << "seed " << seed << " pixel " << x << "," << y;
+          if (outside) ASSERT_EQ(count[y * W + x], 0) << "seed " << seed << " pixel " << x << "," << y;
+        }
+    }
+  }
+}
+
+// A fan of triangles around one vertex placed exactly on a pixel centre: the shared vertex's
+// pixel is drawn exactly once, and so is every pixel of the union.
+TEST(Raster, WatertightFanAroundPixelCentre) {
+  const dvec2 c{32.5, 24.5};
+  const int K = 13;
+  for (bool scan : {false, true}) {
+    std::vector<int> count(W * H, 0);
+    for (int k = 0; k < K; ++k) {
+      double a0 = 2 * M_PI * k / K, a1 = 2 * M_PI * (k + 1) / K;
+      dvec2 p[3] = {c, glm::round((c + 20.0 * dvec2(std::cos(a0), std::sin(a0))) * 256.0) / 256.0,
+                    glm::round((c + 20.0 * dvec2(std::cos(a1), std::sin(a1))) * 256.0) / 256.0};
+      // Recompute the shared rim vertices identically for both neighbours.
+      const double depth[3] = {1, 1, 1};
+      SetupTriangle t;
+      FrontEndOutput counters;
+      ASSERT_TRUE(setup(p, depth, t, counters));
+      for (auto& [px, dd] : rasterize(t, scan)) ++count[px.second * W + px.first];
+    }
+    EXPECT_EQ(count[24 * W + 32], 1);
+    for (int v : count) EXPECT_LE(v, 1);
+    // The inner disc (radius < 19 * cos(pi/K)) is fully covered.
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x)
+        if (glm::length(dvec2(x + 0.5, y + 0.5) - c) < 18) EXPECT_EQ(count[y * W + x], 1);
+  }
+}
+
+TEST(Raster, DegenerateAfterSnappingIsCountedNotDrawn) {
+  dvec2 p[3] = {{10, 10}, {20, 20}, {30, 30 + 1.0 / 1024}};  // collinear once snapped
+  const double depth[3] = {1, 1, 1};
+  SetupTriangle t;
+  FrontEndOutput counters;
+  EXPECT_FALSE(setup(p, depth, t, counters));
+  EXPECT_EQ(counters.degenerate, 1u);
+}
+
+TEST(Raster, DepthIsPerspectiveCorrect) {
+  // A triangle with depths 1 and 4: at the pixel halfway in screen space, 1/d interpolates
+  // linearly, so d = 1 / ((1 + 1/4) / 2) = 1.6, not the screen-linear 2.5.
+  dvec2 p[3] = {{0, 0}, {64, 0}, {0, 48}};
+  const double depth[3] = {1, 4, 1};
+  SetupTriangle t;
+  FrontEndOutput counters;
+  ASSERT_TRUE(setup(p, depth, t, counters));
+  auto c = rasterize(t, false);
+  ASSERT_TRUE(c.count({31, 0}));
+  double x = 31.5, y = 0.5;
+  double b1 = x / 64.0, b2 = y / 48.0, b0 = 1 - b1 - b2;
+  double expected = 1.0 / (b0 / 1 + b1 / 4 + b2 / 1);
+  EXPECT_NEAR(c[std::make_pair(31, 0)], expected, 1e-12);
+}
+
+}  // namespace
+}  // namespace hsr
