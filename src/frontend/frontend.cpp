@@ -118,8 +118,18 @@ bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, Rgba8 col
       ++out.culledFrustum;
     return false;
   }
-  t.depthNum = planeThrough(px, py, num);
-  t.depthDen = planeThrough(px, py, den);
+  // Depth planes through the unsnapped positions: snapping decides coverage only, so depth stays
+  // exact for the true triangle. Fall back to the snapped positions when the unsnapped triangle is
+  // (nearly) degenerate and its plane would be ill-conditioned.
+  double ux[3], uy[3];
+  for (int i = 0; i < 3; ++i) {
+    ux[i] = sx[order[i]];
+    uy[i] = sy[order[i]];
+  }
+  const double exactArea = (ux[1] - ux[0]) * (uy[2] - uy[0]) - (uy[1] - uy[0]) * (ux[2] - ux[0]);
+  const bool useExact = exactArea > 0.5 * double(std::abs(area)) / double(kSubpixelOne * kSubpixelOne);
+  t.depthNum = useExact ? planeThrough(ux, uy, num) : planeThrough(px, py, num);
+  t.depthDen = useExact ? planeThrough(ux, uy, den) : planeThrough(px, py, den);
   t.triangle = triIndex;
   t.face = face;
   t.color = color;
