@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "algorithms/algorithms.hpp"
+#include "core/depth_map.hpp"
 #include "core/timer.hpp"
 #include "frontend/frontend.hpp"
 #include "raster/halfspace.hpp"
@@ -33,19 +34,21 @@ struct Counters {
   uint64_t tests = 0, writes = 0;
 };
 
-// One frame of the z-buffer for a depth storage S; `greater` says which way nearer compares.
-template <DepthStorage S>
+// One frame of the z-buffer for depth storage S and mapping M.
+template <DepthStorage S, DepthMapping M>
 void drawAll(const std::vector<SetupTriangle>& tris, const Camera& cam, const RenderOptions& opt,
              std::vector<uint32_t>& triOf, Frame& frame, Counters& n, uint64_t& depthBytes) {
   using T = DepthT<S>;
   const DepthFormat fmt = opt.depthFormat;
-  const bool greater = fmt.greaterWins();
+  constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
+  const double n0 = cam.near, f0 = cam.far;
+  const bool ortho = cam.orthographic;
   std::vector<T> zbuf(size_t(cam.width) * cam.height, quantize<S>(fmt.clearValue()));
   depthBytes = zbuf.size() * sizeof(T);
   for (uint32_t i = 0; i < tris.size(); ++i) {
     const SetupTriangle& t = tris[i];
     auto fragment = [&](int x, int y, double eyeDepth) {
-      const T z = quantize<S>(fmt.map(eyeDepth, cam.near, cam.far, cam.orthographic));
+      const T z = quantize<S>(mapDepth<M>(eyeDepth, n0, f0, ortho));
       const size_t idx = size_t(y) * size_t(cam.width) + size_t(x);
       ++n.tests;
       if (greater ? z > zbuf[idx] : z < zbuf[idx]) {  // strictly nearer: ties keep the first
@@ -57,6 +60,30 @@ void drawAll(const std::vector<SetupTriangle>& tris, const Camera& cam, const Re
     };
     if (opt.raster == RasterKind::Scanline) rasterizeScanline(t, fragment);
     else rasterizeHalfSpace(t, fragment);
+  }
+}
+
+template <DepthStorage S>
+void drawForMapping(DepthMapping m, const std::vector<SetupTriangle>& tris, const Camera& cam,
+                    const RenderOptions& opt, std::vector<uint32_t>& triOf, Frame& frame, Counters& n,
+                    uint64_t& bytes) {
+  switch (m) {
+    case DepthMapping::Z: return drawAll<S, DepthMapping::Z>(tris, cam, opt, triOf, frame, n, bytes);
+    case DepthMapping::Reversed: return drawAll<S, DepthMapping::Reversed>(tris, cam, opt, triOf, frame, n, bytes);
+    case DepthMapping::Inv: return drawAll<S, DepthMapping::Inv>(tris, cam, opt, triOf, frame, n, bytes);
+    case DepthMapping::Linear: return drawAll<S, DepthMapping::Linear>(tris, cam, opt, triOf, frame, n, bytes);
+  }
+}
+
+// Instantiates the frame loop for the format: every storage x mapping is its own compiled loop.
+void drawForFormat(DepthFormat fmt, const std::vector<SetupTriangle>& tris, const Camera& cam,
+                   const RenderOptions& opt, std::vector<uint32_t>& triOf, Frame& frame, Counters& n,
+                   uint64_t& bytes) {
+  switch (fmt.storage) {
+    case DepthStorage::U16: return drawForMapping<DepthStorage::U16>(fmt.mapping, tris, cam, opt, triOf, frame, n, bytes);
+    case DepthStorage::U24: return drawForMapping<DepthStorage::U24>(fmt.mapping, tris, cam, opt, triOf, frame, n, bytes);
+    case DepthStorage::U32: return drawForMapping<DepthStorage::U32>(fmt.mapping, tris, cam, opt, triOf, frame, n, bytes);
+    case DepthStorage::F32: return drawForMapping<DepthStorage::F32>(fmt.mapping, tris, cam, opt, triOf, frame, n, bytes);
   }
 }
 
@@ -73,12 +100,7 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
   std::vector<uint32_t> triOf(size_t(cam.width) * cam.height, 0);
   Counters n;
   uint64_t depthBytes = 0;
-  switch (opt.depthFormat.storage) {
-    case DepthStorage::U16: drawAll<DepthStorage::U16>(fe.triangles, cam, opt, triOf, frame, n, depthBytes); break;
-    case DepthStorage::U24: drawAll<DepthStorage::U24>(fe.triangles, cam, opt, triOf, frame, n, depthBytes); break;
-    case DepthStorage::U32: drawAll<DepthStorage::U32>(fe.triangles, cam, opt, triOf, frame, n, depthBytes); break;
-    case DepthStorage::F32: drawAll<DepthStorage::F32>(fe.triangles, cam, opt, triOf, frame, n, depthBytes); break;
-  }
+  drawForFormat(opt.depthFormat, fe.triangles, cam, opt, triOf, frame, n, depthBytes);
   st.addTime("raster", timer.lap());
 
   // Resolve: face id and exact eye depth (from the winning triangle's plane) per pixel.

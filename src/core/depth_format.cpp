@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/depth_map.hpp"
+
 namespace hsr {
 
 DepthFormat DepthFormat::parse(const std::string& text) {
@@ -47,15 +49,12 @@ int DepthFormat::bits() const {
 int DepthFormat::bytesPerPixel() const { return storage == DepthStorage::U16 ? 2 : 4; }
 
 double DepthFormat::map(double d, double n, double f, bool ortho) const {
-  double v = 0;
   switch (mapping) {
-    case DepthMapping::Z: v = ortho ? (d - n) / (f - n) : f * (d - n) / ((f - n) * d); break;
-    // Written directly rather than as 1 - z so that no precision is lost near the far plane.
-    case DepthMapping::Reversed: v = ortho ? (f - d) / (f - n) : n * (f - d) / ((f - n) * d); break;
-    case DepthMapping::Inv: v = n / d; break;
-    case DepthMapping::Linear: v = (d - n) / (f - n); break;
+    case DepthMapping::Z: return mapDepth<DepthMapping::Z>(d, n, f, ortho);
+    case DepthMapping::Reversed: return mapDepth<DepthMapping::Reversed>(d, n, f, ortho);
+    case DepthMapping::Inv: return mapDepth<DepthMapping::Inv>(d, n, f, ortho);
+    default: return mapDepth<DepthMapping::Linear>(d, n, f, ortho);
   }
-  return std::clamp(v, 0.0, 1.0);
 }
 
 double DepthFormat::quantize(double v) const {

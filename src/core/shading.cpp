@@ -12,22 +12,33 @@ Rgba8 faceIdColor(uint32_t face) {
   return Rgba8{uint8_t(64 + (h & 0xBF)), uint8_t(64 + ((h >> 8) & 0xBF)), uint8_t(64 + ((h >> 16) & 0xBF)), 255};
 }
 
-Rgba8 shadeTriangle(const Scene& scene, const Camera& camera, const RenderOptions& options, uint32_t t) {
-  const Triangle& tri = scene.triangles[t];
-  if (options.shading == Shading::FaceId) return faceIdColor(tri.face);
-  Rgba8 base = scene.faceColors[tri.face];
-  if (options.shading == Shading::Flat) return base;
+TriangleShader::TriangleShader(const Scene& scene, const Camera& camera, Shading shading)
+    : scene_(scene), shading_(shading), orthographic_(camera.orthographic) {
+  dmat4 worldFromCamera = glm::inverse(camera.cameraFromWorld);
+  eye_ = dvec3(worldFromCamera * dvec4(0, 0, 0, 1));
+  forward_ = dvec3(worldFromCamera * dvec4(0, 0, 1, 0));
+}
+
+Rgba8 TriangleShader::operator()(uint32_t t) const {
+  const Triangle& tri = scene_.triangles[t];
+  if (shading_ == Shading::FaceId) return faceIdColor(tri.face);
+  Rgba8 base = scene_.faceColors[tri.face];
+  if (shading_ == Shading::Flat) return base;
   // Headlight: light from the eye; two-sided, so |cos| of the angle between normal and view ray.
-  dvec3 a = camera.toCamera(scene.positions[tri.v[0]]);
-  dvec3 b = camera.toCamera(scene.positions[tri.v[1]]);
-  dvec3 c = camera.toCamera(scene.positions[tri.v[2]]);
+  const dvec3& a = scene_.positions[tri.v[0]];
+  const dvec3& b = scene_.positions[tri.v[1]];
+  const dvec3& c = scene_.positions[tri.v[2]];
   dvec3 n = glm::cross(b - a, c - a);
-  dvec3 view = camera.orthographic ? dvec3(0, 0, 1) : (a + b + c) / 3.0;
+  dvec3 view = orthographic_ ? forward_ : (a - eye_) + ((b - a) + (c - a)) / 3.0;
   double ln = glm::length(n) * glm::length(view);
   double cosine = ln > 0 ? std::abs(glm::dot(n, view)) / ln : 1.0;
   double k = 0.25 + 0.75 * cosine;
-  auto scale = [k](uint8_t v) { return uint8_t(std::lround(v * k)); };
+  auto scale = [k](uint8_t v) { return uint8_t(v * k + 0.5); };
   return Rgba8{scale(base.r), scale(base.g), scale(base.b), base.a};
+}
+
+Rgba8 shadeTriangle(const Scene& scene, const Camera& camera, const RenderOptions& options, uint32_t t) {
+  return TriangleShader(scene, camera, options.shading)(t);
 }
 
 }  // namespace hsr

@@ -5,10 +5,24 @@
 
 namespace hsr {
 
-/// Colour of scene triangle `triangleIndex` under options.shading.
-Rgba8 shadeTriangle(const Scene& scene, const Camera& camera, const RenderOptions& options,
-                    uint32_t triangleIndex);
 /// A distinct, deterministic colour for face `face` (used by Shading::FaceId).
 Rgba8 faceIdColor(uint32_t face);
+
+/// Shades scene triangles for one camera; construct once per frame.
+class TriangleShader {
+ public:
+  TriangleShader(const Scene& scene, const Camera& camera, Shading shading);
+  Rgba8 operator()(uint32_t triangleIndex) const;
+
+ private:
+  const Scene& scene_;
+  Shading shading_;
+  bool orthographic_;
+  dvec3 eye_;      // world position of the eye (perspective)
+  dvec3 forward_;  // world view direction (orthographic)
+};
+
+/// Colour of one triangle (convenience; builds a TriangleShader, so prefer that in loops).
+Rgba8 shadeTriangle(const Scene& scene, const Camera& camera, const RenderOptions& options, uint32_t triangleIndex);
 
 }  // namespace hsr

@@ -78,8 +78,9 @@ bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, Rgba8 col
   for (int i = 0; i < 3; ++i) {
     sx[i] = v[i].hx / v[i].w;
     sy[i] = v[i].hy / v[i].w;
-    X[i] = std::llround(sx[i] * kSubpixelOne);
-    Y[i] = std::llround(sy[i] * kSubpixelOne);
+    // Round to the nearest 1/256 pixel (|coordinate| < 2^15 pixels after clipping).
+    X[i] = int64_t(std::floor(sx[i] * kSubpixelOne + 0.5));
+    Y[i] = int64_t(std::floor(sy[i] * kSubpixelOne + 0.5));
   }
   // Twice the signed area on the snapped grid, y down: negative = counter-clockwise as seen.
   int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
@@ -167,6 +168,7 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
     hv[i] = {h.x, h.y, h.z, h.w};
   }
 
+  const TriangleShader shade(scene, cam, options.shading);
   out.triangles.reserve(scene.triangles.size());
   HVertex poly[3 + kPlanes], scratch[3 + kPlanes];
   SetupTriangle st;
@@ -182,7 +184,7 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
       ++out.culledFrustum;
       continue;
     }
-    Rgba8 color = shadeTriangle(scene, cam, options, ti);
+    Rgba8 color = shade(ti);
     if ((c0 | c1 | c2) == 0) {
       if (setupTriangle(v, ti, tri.face, color, cam, options.cull, out, st)) out.triangles.push_back(st);
       continue;
