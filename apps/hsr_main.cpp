@@ -1,0 +1,612 @@
+// The `hsr` command line: a table of subcommands (render, bench, scenes, info, help), each its
+// own function with its own flags and help; docs/cli.md documents them. Used by people and by
+// the scripts that compare hsr with other renderers, so flags, output files and exit status
+// follow ../shared/CONVENTIONS.md "Command line": 0 success, 2 bad usage or input, 1 otherwise.
+#include <hsr/hsr.hpp>
+
+#include "core/parallel.hpp"
+
+#include <CLI/CLI.hpp>
+#include <fmt/core.h>
+#include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <sstream>
+
+#ifndef HSR_VERSION
+#define HSR_VERSION "0.1.0"  // normally set by CMake from project(VERSION)
+#endif
+
+namespace {
+
+using hsr::InputError;
+using Json = nlohmann::ordered_json;
+
+constexpr int kMaxImageSide = 16384;
+
+// ---------------------------------------------------------------------------------------------
+// Flag values. Each parser throws InputError "--flag 'text': problem" (exit status 2).
+
+// A whole-string, finite number: "1e3" yes; "1e3x", "nan", "inf" no.
+bool parseFinite(std::string_view text, double& value) {
+  auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  return ec == std::errc() && end == text.data() + text.size() && std::isfinite(value);
+}
+
+// Comma-separated finite numbers, minCount to maxCount of them; `form` shows the expected text.
+std::vector<double> parseNumbers(const std::string& flag, const std::string& text, size_t minCount, size_t maxCount,
+                                 const char* form) {
+  std::vector<double> values;
+  size_t start = 0;
+  bool ok = true;
+  while (ok) {
+    size_t comma = std::min(text.find(',', start), text.size());
+    double v;
+    ok = parseFinite(std::string_view(text).substr(start, comma - start), v);
+    values.push_back(v);
+    if (comma == text.size()) break;
+    start = comma + 1;
+  }
+  if (!ok || values.size() < minCount || values.size() > maxCount)
+    throw InputError(fmt::format("{} '{}': expected {} (finite numbers)", flag, text, form));
+  return values;
+}
+
+hsr::dvec3 parseVec3(const std::string& flag, const std::string& text) {
+  std::vector<double> v = parseNumbers(flag, text, 3, 3, "x,y,z");
+  return {v[0], v[1], v[2]};
+}
+
+struct ImageSize {
+  int width = 0, height = 0;
+};
+ImageSize parseSize(const std::string& text) {
+  size_t x = text.find_first_of("xX");
+  ImageSize size;
+  auto side = [](std::string_view s, int& out) {
+    auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+    return ec == std::errc() && end == s.data() + s.size() && out >= 1 && out <= kMaxImageSide;
+  };
+  if (x == std::string::npos || !side(std::string_view(text).substr(0, x), size.width) ||
+      !side(std::string_view(text).substr(x + 1), size.height))
+    throw InputError(fmt::format("--size '{}': expected WIDTHxHEIGHT, each 1 to {}", text, kMaxImageSide));
+  return size;
+}
+
+hsr::Rgba8 parseColor(const std::string& text) {
+  std::vector<double> v = parseNumbers("--background", text, 3, 4, "r,g,b or r,g,b,a");
+  for (double c : v)
+    if (c < 0 || c > 255 || c != std::floor(c))
+      throw InputError("--background '" + text + "': components are integers 0 to 255");
+  return {uint8_t(v[0]), uint8_t(v[1]), uint8_t(v[2]), uint8_t(v.size() == 4 ? v[3] : 255)};
+}
+
+std::string readTextFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open: " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(path + ": cannot read: " + std::strerror(errno));
+  return text.str();
+}
+
+// A positive finite number, checked by CLI11 before it converts the flag's value.
+const CLI::Validator kPositive(
+    [](std::string& text) {
+      double v;
+      return parseFinite(text, v) && v > 0 ? std::string() : "'" + text + "' is not a positive finite number";
+    },
+    "POSITIVE");
+
+template <class Enum>
+using Names = std::vector<std::pair<std::string, Enum>>;
+const Names<hsr::RasterKind> kRasterNames{{"halfspace", hsr::RasterKind::HalfSpace}, {"scanline", hsr::RasterKind::Scanline}};
+const Names<hsr::Cull> kCullNames{{"none", hsr::Cull::None}, {"back", hsr::Cull::Back}, {"front", hsr::Cull::Front}};
+const Names<hsr::Shading> kShadingNames{
+    {"lambert", hsr::Shading::Lambert}, {"flat", hsr::Shading::Flat}, {"faceid", hsr::Shading::FaceId}};
+
+// The names, for CLI11 to check a flag's value against (in any letter case).
+template <class Enum>
+CLI::IsMember oneOf(const Names<Enum>& names) {
+  std::vector<std::string> keys;
+  for (const auto& entry : names) keys.push_back(entry.first);
+  return CLI::IsMember(keys, CLI::ignore_case);
+}
+template <class Enum>
+std::string nameOf(const Names<Enum>& names, Enum value) {
+  for (const auto& [key, v] : names)
+    if (v == value) return key;
+  throw std::logic_error("nameOf: unnamed value");
+}
+// The value of a name oneOf() accepted (in any letter case).
+template <class Enum>
+Enum valueOf(const Names<Enum>& names, std::string name) {
+  for (char& c : name) c = char(std::tolower(static_cast<unsigned char>(c)));
+  for (const auto& [key, value] : names)
+    if (key == name) return value;
+  throw std::logic_error("valueOf: '" + name + "' was not checked");
+}
+
+// ---------------------------------------------------------------------------------------------
+// What render and bench share: the scene, the image size, the camera and the algorithm settings.
+
+struct Job {
+  std::string sceneName;
+  hsr::Scene scene;
+  hsr::Camera camera;
+  hsr::RenderOptions options;
+};
+
+std::string algorithmNames() {
+  std::string names;
+  for (const hsr::AlgorithmInfo& a : hsr::algorithms()) names += (names.empty() ? "" : ", ") + a.name;
+  return names;
+}
+
+struct ViewFlags {
+  std::string scene, cameraFile, size = "1280x720", depthFormat, background;
+  std::string raster = "halfspace", cull = "none", shading = "lambert";
+  std::string eye, target, up;
+  double fov = 0, near = 0, far = 0, ortho = 0;
+  CLI::Option *fovFlag = nullptr, *nearFlag = nullptr, *farFlag = nullptr, *orthoFlag = nullptr;
+  hsr::RenderOptions options;  // algorithm and threads: set by CLI11 directly
+
+  void declare(CLI::App& cmd) {
+    cmd.add_option("scene", scene, "Mesh file (OBJ, PLY, STL, OFF, glTF/GLB, ...), scene JSON or builtin:NAME[?k=v&...]")
+        ->type_name("SCENE")
+        ->required();
+    cmd.add_option("--camera", cameraFile, "Camera JSON (OpenGL or OpenCV style); the flags below override it")
+        ->type_name("CAM.json");
+    cmd.add_option("--size", size, "Image size")->type_name("WxH")->capture_default_str();
+
+    cmd.add_option("--algorithm", options.algorithm, "Visibility algorithm: " + algorithmNames())
+        ->type_name("NAME")
+        ->capture_default_str();
+    cmd.add_option("--depth-format", depthFormat,
+                   "Depth buffer STORAGE[:MAPPING]: storage u16|u24|u32|f32, mapping z|reversed|inv|linear "
+                   "(default f32:reversed)")
+        ->type_name("FMT");
+    cmd.add_option("--threads", options.threads, "Worker threads (0 = all cores)")
+        ->type_name("N")
+        ->check(CLI::Range(0, 4096))
+        ->capture_default_str();
+    cmd.add_option("--raster", raster, "Triangle rasterizer")->check(oneOf(kRasterNames))->capture_default_str();
+    cmd.add_option("--cull", cull, "Face culling (faces are two-sided by default)")
+        ->check(oneOf(kCullNames))
+        ->capture_default_str();
+    cmd.add_option("--shading", shading, "Colour of the image")->check(oneOf(kShadingNames))->capture_default_str();
+    cmd.add_option("--background", background, "Background colour, 0-255 (default 0,0,0)")->type_name("R,G,B[,A]");
+
+    const char* group = "Camera (override or extend --camera; default: the scene's camera or a framing of it)";
+    cmd.add_option("--eye", eye, "Camera position")->type_name("X,Y,Z")->group(group);
+    cmd.add_option("--target", target, "Point looked at")->type_name("X,Y,Z")->group(group);
+    cmd.add_option("--up", up, "Up direction")->type_name("X,Y,Z")->group(group);
+    fovFlag = cmd.add_option("--fov", fov, "Vertical field of view, degrees")->type_name("DEG")->check(kPositive)->group(group);
+    nearFlag = cmd.add_option("--near", near, "Near clipping plane (eye depth)")->type_name("N")->check(kPositive)->group(group);
+    farFlag = cmd.add_option("--far", far, "Far clipping plane (eye depth)")->type_name("F")->check(kPositive)->group(group);
+    orthoFlag = cmd.add_option("--ortho", ortho, "Orthographic, view volume HEIGHT world units tall")
+                    ->type_name("HEIGHT")
+                    ->check(kPositive)
+                    ->group(group);
+  }
+
+  bool openGlFlagsGiven() const {
+    return !eye.empty() || !target.empty() || !up.empty() || fovFlag->count() || orthoFlag->count();
+  }
+
+  // Checks every flag, then loads the scene and resolves the camera: bad flags fail before a
+  // possibly long scene load.
+  Job prepare() const {
+    Job job;
+    job.sceneName = scene;
+    ImageSize imageSize = parseSize(size);
+    job.options = options;
+    job.options.raster = valueOf(kRasterNames, raster);
+    job.options.cull = valueOf(kCullNames, cull);
+    job.options.shading = valueOf(kShadingNames, shading);
+    if (!depthFormat.empty()) job.options.depthFormat = hsr::DepthFormat::parse(depthFormat);
+    if (!background.empty()) job.options.background = parseColor(background);
+    if (!hsr::findAlgorithm(options.algorithm))
+      throw InputError(fmt::format("--algorithm '{}': unknown (known: {})", options.algorithm, algorithmNames()));
+    std::optional<hsr::CameraSpec> fileCamera;
+    if (!cameraFile.empty()) fileCamera = hsr::parseCameraJson(readTextFile(cameraFile), cameraFile);
+    std::optional<hsr::dvec3> eyeValue, targetValue, upValue;
+    if (!eye.empty()) eyeValue = parseVec3("--eye", eye);
+    if (!target.empty()) targetValue = parseVec3("--target", target);
+    if (!up.empty()) upValue = parseVec3("--up", up);
+
+    job.scene = hsr::loadScene(scene);
+    const hsr::Bounds3 bounds = job.scene.bounds();
+    hsr::CameraSpec spec = fileCamera         ? *fileCamera
+                           : job.scene.camera ? *job.scene.camera
+                           : fovFlag->count() ? hsr::frameBounds(bounds, fov)
+                                              : hsr::frameBounds(bounds);
+    // The name camera errors carry: where the camera came from.
+    bool flagsGiven = openGlFlagsGiven() || nearFlag->count() || farFlag->count();
+    std::string cameraName = !cameraFile.empty() ? cameraFile : flagsGiven ? "command line" : scene;
+    if (!cameraFile.empty() && flagsGiven) cameraName += " (with camera flags)";
+    if (openGlFlagsGiven() && spec.kind != hsr::CameraSpec::Kind::OpenGL)
+      throw InputError(cameraName + ": --eye/--target/--up/--fov/--ortho apply to OpenGL-style cameras, not this OpenCV one");
+    // A scene's clipping planes suit its own viewpoint: when the flags move the camera, let
+    // resolveCamera fit them to the scene again (a camera file's planes are the user's choice).
+    if (!fileCamera && (eyeValue || targetValue || orthoFlag->count())) {
+      spec.near.reset();
+      spec.far.reset();
+    }
+    if (eyeValue) spec.eye = *eyeValue;
+    if (targetValue) spec.target = *targetValue;
+    if (upValue) spec.up = *upValue;
+    if (fovFlag->count()) spec.fovyDeg = fov;
+    if (orthoFlag->count()) spec.orthoHeight = ortho;
+    if (nearFlag->count()) spec.near = near;
+    if (farFlag->count()) spec.far = far;
+    job.camera = hsr::resolveCamera(spec, imageSize.width, imageSize.height, bounds, cameraName);
+    return job;
+  }
+};
+
+double millisecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Subcommands. Each declares its flags on its CLI11 app, bound to state that the returned
+// runner owns, and the runner does the work once parsing succeeded.
+
+using Runner = std::function<int()>;
+
+struct RenderFlags {
+  ViewFlags view;
+  std::string out, ids, depth, depthImage, stats;
+  bool verify = false, quiet = false, json = false;
+};
+
+// The human summary of one rendered frame.
+void printSummary(const Job& job, const hsr::Stats& s, double wallMs, const std::vector<std::string>& written) {
+  double pixels = double(s.width) * double(s.height);
+  fmt::print("{} on {}: {}x{}{}, {} threads, raster {}, cull {}\n", s.algorithm, job.sceneName, s.width, s.height,
+             s.depth_format.empty() ? "" : ", depth " + s.depth_format, hsr::resolveThreads(job.options.threads),
+             nameOf(kRasterNames, job.options.raster), nameOf(kCullNames, job.options.cull));
+  fmt::print("  faces {}, triangles {} (clipped {}, degenerate {}; culled back-face {}, frustum {}, occlusion {})\n",
+             s.faces, s.triangles, s.triangles_clipped, s.triangles_degenerate, s.culled_backface, s.culled_frustum,
+             s.culled_occlusion);
+  fmt::print("  covered {} pixels ({:.1f}%), overdraw {:.2f}, depth tests {}, writes {}, memory {:.1f} MB\n",
+             s.covered_pixels, pixels > 0 ? 100.0 * double(s.covered_pixels) / pixels : 0.0, s.overdraw(),
+             s.depth_tests, s.depth_writes, double(s.memory_bytes) / 1e6);
+  std::string stages;
+  for (const auto& [stage, ms] : s.time_ms) stages += fmt::format("{}{} {:.2f}", stages.empty() ? "" : ", ", stage, ms);
+  fmt::print("  time {:.2f} ms wall{}\n", wallMs, stages.empty() ? "" : " (" + stages + ")");
+  if (s.wrong_pixels)
+    fmt::print("  verify: {} wrong pixels, {} ambiguous\n", *s.wrong_pixels, s.ambiguous_pixels.value_or(0));
+  if (!written.empty()) fmt::print("  wrote {}\n", fmt::join(written, ", "));
+}
+
+int runRender(const RenderFlags& f) {
+  struct Output {
+    const std::string& path;  // empty: not requested
+    hsr::OutputKind kind;
+    void (*write)(const hsr::Frame&, const std::string&);
+  };
+  const Output outputs[] = {{f.out, hsr::OutputKind::Color, hsr::writeColorPng},
+                            {f.ids, hsr::OutputKind::FaceIds, hsr::writeFaceIds},
+                            {f.depth, hsr::OutputKind::Depth, hsr::writeDepth},
+                            {f.depthImage, hsr::OutputKind::DepthImage, hsr::writeDepthImage}};
+  // Reject output names no writer knows before any work is done.
+  for (const Output& o : outputs)
+    if (!o.path.empty()) hsr::checkOutputPath(o.kind, o.path);
+
+  Job job = f.view.prepare();
+  job.options.verify = f.verify;
+  auto start = std::chrono::steady_clock::now();
+  hsr::Frame frame = hsr::render(job.scene, job.camera, job.options);
+  double wallMs = millisecondsSince(start);
+
+  std::vector<std::string> written;
+  for (const Output& o : outputs) {
+    if (o.path.empty()) continue;
+    o.write(frame, o.path);
+    written.push_back(o.path);
+  }
+  const std::string statsJson = frame.stats.toJson();
+  if (!f.stats.empty()) {
+    hsr::writeTextFile(statsJson + "\n", f.stats);
+    written.push_back(f.stats);
+  }
+
+  if (f.json)
+    fmt::print("{}\n", statsJson);
+  else if (!f.quiet)
+    printSummary(job, frame.stats, wallMs, written);
+  return 0;
+}
+
+Runner setupRender(CLI::App& cmd) {
+  auto f = std::make_shared<RenderFlags>();
+  f->view.declare(cmd);
+  const char* outputs = "Outputs (written atomically, only after a successful render)";
+  cmd.add_option("-o,--out", f->out, "Colour image")->type_name("COLOR.png")->group(outputs);
+  cmd.add_option("--ids", f->ids, "Face ids: PNG (24-bit id+1, 0 = background) or .npy (int32, -1)")
+      ->type_name("IDS.png|.npy")
+      ->group(outputs);
+  cmd.add_option("--depth", f->depth, "Eye depth, float32, +inf background")
+      ->type_name("DEPTH.npy|.pfm|.exr|.f32")
+      ->group(outputs);
+  cmd.add_option("--depth-image", f->depthImage, "Depth as a grey picture, near white, background black")
+      ->type_name("DEPTH.png")
+      ->group(outputs);
+  cmd.add_option("--stats", f->stats, "Statistics JSON")->type_name("STATS.json")->group(outputs);
+  cmd.add_flag("--verify", f->verify, "Also render the exact reference and count wrong/ambiguous pixels");
+  cmd.add_flag("--json", f->json, "Print the statistics JSON to stdout instead of the summary");
+  cmd.add_flag("-q,--quiet", f->quiet, "Print nothing on success");
+
+  std::string footer = "Algorithms:\n";
+  for (const hsr::AlgorithmInfo& a : hsr::algorithms()) footer += fmt::format("  {:<12} {}\n", a.name, a.summary);
+  footer +=
+      "\nExamples:\n"
+      "  hsr render builtin:cubes -o cubes.png\n"
+      "  hsr render model.obj --camera cam.json --size 1920x1080 --ids ids.png --depth depth.npy --verify\n"
+      "  hsr render scene.json --eye 4,3,5 --target 0,0,0 --depth-format u16:z --depth-image z.png";
+  cmd.footer(footer);
+  return [f] { return runRender(*f); };
+}
+
+struct BenchFlags {
+  ViewFlags view;
+  int frames = 10, warmup = 2;
+  bool json = false;
+};
+
+int runBench(const BenchFlags& f) {
+  Job job = f.view.prepare();
+  std::vector<double> frameMs;
+  hsr::Frame frame;
+  for (int i = 0; i < f.warmup + f.frames; ++i) {
+    auto start = std::chrono::steady_clock::now();
+    hsr::Frame next = hsr::render(job.scene, job.camera, job.options);
+    double ms = millisecondsSince(start);
+    if (i >= f.warmup) frameMs.push_back(ms);
+    frame = std::move(next);  // freeing the previous frame stays outside the timed region
+  }
+  std::vector<double> sorted = frameMs;
+  std::sort(sorted.begin(), sorted.end());
+  size_t n = sorted.size();
+  double median = n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
+  int threads = hsr::resolveThreads(job.options.threads);
+
+  if (!f.json) {
+    fmt::print("{} on {}: {}x{}, {} threads: median {:.3f} ms, min {:.3f} ms over {} frames ({} warm-up)\n",
+               frame.stats.algorithm, job.sceneName, frame.width, frame.height, threads, median, sorted.front(),
+               n, f.warmup);
+    return 0;
+  }
+  // Every figure travels with what produced it: scene, size, threads, build.
+  Json out;
+  out["scene"] = job.sceneName;
+  out["size"] = fmt::format("{}x{}", frame.width, frame.height);
+  out["threads"] = threads;
+  out["frames"] = n;
+  out["warmup"] = f.warmup;
+  out["median_ms"] = median;
+  out["min_ms"] = sorted.front();
+  out["frame_ms"] = frameMs;
+  out["build"] = {{"version", HSR_VERSION},
+#ifdef __clang__
+                  {"compiler", "clang " __clang_version__},
+#else
+                  {"compiler", "gcc " __VERSION__},
+#endif
+#ifdef NDEBUG
+                  {"assertions", false}
+#else
+                  {"assertions", true}
+#endif
+  };
+  const Json stats = Json::parse(frame.stats.toJson());
+  for (const auto& [key, value] : stats.items())
+    if (!out.contains(key)) out[key] = value;
+  fmt::print("{}\n", out.dump(2));
+  return 0;
+}
+
+Runner setupBench(CLI::App& cmd) {
+  auto f = std::make_shared<BenchFlags>();
+  f->view.declare(cmd);
+  cmd.add_option("--frames", f->frames, "Timed frames")->type_name("N")->check(CLI::Range(1, 1000000))->capture_default_str();
+  cmd.add_option("--warmup", f->warmup, "Untimed frames first")->type_name("K")->check(CLI::Range(0, 1000000))->capture_default_str();
+  cmd.add_flag("--json", f->json,
+               "Print one JSON object: median_ms, min_ms, frames, frame_ms, threads, scene, size, build and the "
+               "last frame's statistics");
+  cmd.footer(
+      "Times are wall-clock milliseconds of whole render() calls.\n\n"
+      "Examples:\n"
+      "  hsr bench builtin:cubes --frames 20\n"
+      "  hsr bench model.obj --camera cam.json --size 1920x1080 --algorithm zbuffer --threads 1 --json");
+  return [f] { return runBench(*f); };
+}
+
+Runner setupScenes(CLI::App& cmd) {
+  auto json = std::make_shared<bool>(false);
+  auto names = std::make_shared<bool>(false);
+  cmd.add_flag("--json", *json, "Print a JSON array instead");
+  cmd.add_flag("--names", *names, "Print only the names, one per line (for scripts)");
+  cmd.footer("Use one as SCENE: builtin:NAME or builtin:NAME?param=value&param=value");
+  return [json, names] {
+    if (*names) {
+      for (const hsr::BuiltinInfo& b : hsr::builtinScenes()) fmt::print("{}\n", b.name);
+      return 0;
+    }
+    if (*json) {
+      Json out = Json::array();
+      for (const hsr::BuiltinInfo& b : hsr::builtinScenes()) {
+        Json params = Json::array();
+        for (const hsr::BuiltinParam& p : b.params)
+          params.push_back({{"name", p.name}, {"default", p.defaultValue}, {"help", p.help}});
+        out.push_back({{"name", b.name}, {"summary", b.summary}, {"params", params}});
+      }
+      fmt::print("{}\n", out.dump(2));
+      return 0;
+    }
+    for (const hsr::BuiltinInfo& b : hsr::builtinScenes()) {
+      fmt::print("builtin:{:<16} {}\n", b.name, b.summary);
+      for (const hsr::BuiltinParam& p : b.params) fmt::print("    {:<20} {}\n", p.name + "=" + p.defaultValue, p.help);
+    }
+    return 0;
+  };
+}
+
+Json boundsJson(const hsr::Bounds3& b) {
+  if (b.empty()) return nullptr;
+  return {{"min", {b.lo.x, b.lo.y, b.lo.z}}, {"max", {b.hi.x, b.hi.y, b.hi.z}}};
+}
+
+int runInfo(const std::string& sceneName, bool json) {
+  hsr::Scene scene = hsr::loadScene(sceneName);
+  const hsr::Bounds3 bounds = scene.bounds();
+  const hsr::SceneProblems& problems = scene.problems;
+  if (json) {
+    Json out;
+    out["scene"] = sceneName;
+    out["faces"] = scene.faceCount();
+    out["triangles"] = scene.triangles.size();
+    out["vertices"] = scene.positions.size();
+    out["meshes"] = Json::array();
+    for (const hsr::MeshRange& m : scene.meshes)
+      out["meshes"].push_back({{"name", m.name}, {"first_face", m.firstFace}, {"faces", m.faceCount}});
+    out["bounds"] = boundsJson(bounds);
+    out["problems"] = {{"degenerate_faces", problems.degenerateFaces},
+                       {"non_planar_faces", problems.nonPlanarFaces},
+                       {"concave_faces", problems.concaveFaces},
+                       {"notes", problems.notes}};
+    out["camera"] = scene.camera ? Json::parse(hsr::cameraSpecToJson(*scene.camera)) : Json(nullptr);
+    fmt::print("{}\n", out.dump(2));
+    return 0;
+  }
+  fmt::print("{}\n  faces {}, triangles {}, vertices {}\n", sceneName, scene.faceCount(), scene.triangles.size(),
+             scene.positions.size());
+  // A file can hold thousands of meshes: the text view shows the first few.
+  constexpr size_t kMeshesShown = 20;
+  fmt::print("  meshes {}\n", scene.meshes.size());
+  for (size_t i = 0; i < std::min(scene.meshes.size(), kMeshesShown); ++i)
+    fmt::print("    {:<24} {} faces\n", scene.meshes[i].name.empty() ? "(unnamed)" : scene.meshes[i].name,
+               scene.meshes[i].faceCount);
+  if (scene.meshes.size() > kMeshesShown) fmt::print("    ... and {} more (see --json)\n", scene.meshes.size() - kMeshesShown);
+  if (bounds.empty())
+    fmt::print("  bounds: empty\n");
+  else
+    fmt::print("  bounds [{}, {}, {}] .. [{}, {}, {}]\n", bounds.lo.x, bounds.lo.y, bounds.lo.z, bounds.hi.x,
+               bounds.hi.y, bounds.hi.z);
+  fmt::print("  problems: {} degenerate, {} non-planar, {} concave faces\n", problems.degenerateFaces,
+             problems.nonPlanarFaces, problems.concaveFaces);
+  for (const std::string& note : problems.notes) fmt::print("    {}\n", note);
+  fmt::print("  camera: {}\n",
+             scene.camera ? Json::parse(hsr::cameraSpecToJson(*scene.camera)).dump() : "none (hsr frames the bounds)");
+  return 0;
+}
+
+Runner setupInfo(CLI::App& cmd) {
+  auto scene = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  cmd.add_option("scene", *scene, "Mesh file, scene JSON or builtin:NAME")->type_name("SCENE")->required();
+  cmd.add_flag("--json", *json, "Print one JSON object instead");
+  return [scene, json] { return runInfo(*scene, *json); };
+}
+
+Runner setupHelp(CLI::App& cmd);
+
+// The subcommands, in the order `hsr help` lists them.
+struct Subcommand {
+  const char* name;
+  const char* summary;
+  Runner (*setup)(CLI::App&);
+};
+const Subcommand kSubcommands[] = {
+    {"render", "Render a scene to colour, face-id and depth files, with statistics", setupRender},
+    {"bench", "Time repeated renders of a scene: median and minimum", setupBench},
+    {"scenes", "List the built-in scenes and their parameters", setupScenes},
+    {"info", "Describe a scene: counts, meshes, bounds, problems, camera", setupInfo},
+    {"help", "Explain hsr or one of its commands", setupHelp},
+};
+
+Runner setupHelp(CLI::App& cmd) {
+  auto topic = std::make_shared<std::string>();
+  cmd.add_option("command", *topic, "Command to explain")->type_name("COMMAND");
+  const CLI::App* root = cmd.get_parent();
+  return [root, topic] {
+    // App::help() of the root would describe the subcommand being run (this one): format the
+    // root page directly.
+    if (topic->empty()) {
+      std::cout << root->get_formatter()->make_help(root, root->get_name(), CLI::AppFormatMode::Normal);
+      return 0;
+    }
+    std::string known;
+    for (const Subcommand& s : kSubcommands) {
+      if (*topic == s.name) {
+        std::cout << root->get_subcommand(s.name)->help(root->get_name());
+        return 0;
+      }
+      known += (known.empty() ? "" : ", ") + std::string(s.name);
+    }
+    throw InputError("help: unknown command '" + *topic + "' (commands: " + known + ")");
+  };
+}
+
+int runCli(int argc, char** argv) {
+  CLI::App app("hsr " HSR_VERSION " - hidden-surface removal: an exact z-buffer and a lab of classic visibility algorithms",
+               "hsr");
+  app.set_version_flag("--version", "hsr " HSR_VERSION);
+  app.require_subcommand(1);
+  app.footer(
+      "Run 'hsr help COMMAND' or 'hsr COMMAND --help' for a command's flags.\n"
+      "Exit status: 0 success, 2 bad usage or bad input (one line on stderr), 1 any other failure.");
+  std::map<const CLI::App*, Runner> runners;
+  for (const Subcommand& s : kSubcommands) {
+    CLI::App* cmd = app.add_subcommand(s.name, s.summary);
+    runners[cmd] = s.setup(*cmd);
+  }
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {  // --help, --version
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    const std::vector<CLI::App*> chosen = app.get_subcommands();
+    std::string topic = chosen.empty() ? "hsr help" : "hsr help " + chosen.front()->get_name();
+    throw InputError(std::string(e.what()) + " (see '" + topic + "')");
+  }
+  return runners.at(app.get_subcommands().front())();  // require_subcommand(1): exactly one
+}
+
+// One line on stderr, whatever the message holds.
+int fail(int status, std::string message) {
+  std::replace(message.begin(), message.end(), '\n', ' ');
+  std::cout.flush();
+  std::cerr << "hsr: " << message << '\n';
+  return status;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return runCli(argc, argv);
+  } catch (const InputError& e) {
+    return fail(2, e.what());
+  } catch (const std::bad_alloc&) {
+    return fail(1, "error: out of memory");
+  } catch (const std::exception& e) {
+    return fail(1, std::string("error: ") + e.what());
+  } catch (...) {
+    return fail(1, "error: unknown exception");
+  }
+}

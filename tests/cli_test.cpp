@@ -1,0 +1,256 @@
+// Tests of the `hsr` command line as scripts use it: runs the built binary (HSR_CLI_PATH) in a
+// scratch directory and checks exit status, the one-line error on stderr, the files written and
+// the JSON printed (CONVENTIONS.md "Command line").
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <stb/stb_image.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string readText(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+struct Result {
+  int status = -1;
+  std::string out, err;
+  // Usage errors are exactly one line "hsr: ...".
+  bool oneErrorLine() const {
+    return err.rfind("hsr: ", 0) == 0 && std::count(err.begin(), err.end(), '\n') == 1 && err.back() == '\n';
+  }
+};
+
+std::ostream& operator<<(std::ostream& os, const Result& r) {
+  return os << "status " << r.status << "\nstdout: " << r.out << "\nstderr: " << r.err;
+}
+
+class CommandLine : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("hsr_cli_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // Runs `hsr ARGS` in the scratch directory (ARGS is shell text: quote as needed).
+  Result hsr(const std::string& args) const {
+    std::string command = "cd '" + dir_.string() + "' && '" HSR_CLI_PATH "' " + args + " >stdout.txt 2>stderr.txt";
+    int raw = std::system(command.c_str());
+    Result result;
+    result.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    result.out = readText(dir_ / "stdout.txt");
+    result.err = readText(dir_ / "stderr.txt");
+    fs::remove(dir_ / "stdout.txt");
+    fs::remove(dir_ / "stderr.txt");
+    return result;
+  }
+  fs::path file(const std::string& name) const { return dir_ / name; }
+  void writeFile(const std::string& name, const std::string& text) const { std::ofstream(dir_ / name) << text; }
+  std::vector<std::string> listing() const {
+    std::vector<std::string> names;
+    for (const auto& entry : fs::directory_iterator(dir_)) names.push_back(entry.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+
+  fs::path dir_;
+};
+
+// The header text and data of an NPY file.
+std::pair<std::string, std::string> splitNpy(const std::string& npy) {
+  EXPECT_GE(npy.size(), 10u);
+  EXPECT_EQ(npy.compare(0, 6, "\x93NUMPY"), 0);
+  size_t len = uint8_t(npy[8]) | (size_t(uint8_t(npy[9])) << 8);
+  return {npy.substr(10, len), npy.substr(10 + len)};
+}
+
+}  // namespace
+
+TEST_F(CommandLine, ScenesListsBuiltins) {
+  Result r = hsr("scenes");
+  EXPECT_EQ(r.status, 0) << r;
+  EXPECT_NE(r.out.find("builtin:cubes"), std::string::npos) << r;
+  EXPECT_TRUE(r.err.empty()) << r;
+}
+
+TEST_F(CommandLine, VersionAndHelp) {
+  Result r = hsr("--version");
+  EXPECT_EQ(r.status, 0) << r;
+  EXPECT_EQ(r.out.rfind("hsr ", 0), 0u) << r;
+  r = hsr("help");
+  EXPECT_EQ(r.status, 0) << r;
+  for (const char* command : {"render", "bench", "scenes", "info", "help"}) EXPECT_NE(r.out.find(command), std::string::npos);
+}
+
+TEST_F(CommandLine, HelpRenderMentionsEveryFlag) {
+  Result r = hsr("help render");
+  ASSERT_EQ(r.status, 0) << r;
+  for (const char* flag :
+       {"--camera", "--size", "--algorithm", "--depth-format", "--out", "-o", "--ids", "--depth ", "--depth-image",
+        "--stats", "--verify", "--threads", "--raster", "--cull", "--shading", "--background", "--eye", "--target",
+        "--up", "--fov", "--near", "--far", "--ortho", "--json", "--quiet", "zbuffer"})
+    EXPECT_NE(r.out.find(flag), std::string::npos) << flag;
+  EXPECT_EQ(hsr("render --help").out, r.out);
+}
+
+TEST_F(CommandLine, RenderWritesPngOfRequestedSize) {
+  Result r = hsr("render builtin:cubes -o c.png --size 64x48 --threads 1");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_TRUE(r.err.empty()) << r;
+  EXPECT_NE(r.out.find("64x48"), std::string::npos) << r;
+  int w = 0, h = 0, channels = 0;
+  uint8_t* pixels = stbi_load(file("c.png").c_str(), &w, &h, &channels, 0);
+  ASSERT_NE(pixels, nullptr);
+  stbi_image_free(pixels);
+  EXPECT_EQ(w, 64);
+  EXPECT_EQ(h, 48);
+  EXPECT_EQ(listing(), std::vector<std::string>{"c.png"});  // no temporary left behind
+}
+
+TEST_F(CommandLine, IdsAndDepthNpyAgree) {
+  Result r = hsr("render builtin:cubes --size 64x48 --threads 1 --ids ids.npy --depth d.npy --quiet");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_TRUE(r.out.empty()) << r;
+  auto [idsHeader, ids] = splitNpy(readText(file("ids.npy")));
+  auto [depthHeader, depth] = splitNpy(readText(file("d.npy")));
+  EXPECT_NE(idsHeader.find("'<i4'"), std::string::npos) << idsHeader;
+  EXPECT_NE(idsHeader.find("(48, 64)"), std::string::npos) << idsHeader;
+  EXPECT_NE(depthHeader.find("'<f4'"), std::string::npos) << depthHeader;
+  ASSERT_EQ(ids.size(), 64u * 48 * 4);
+  ASSERT_EQ(depth.size(), 64u * 48 * 4);
+  // Every pixel is background (-1, +inf) or a face (id >= 0, finite positive depth); both occur.
+  size_t covered = 0, empty = 0;
+  for (size_t i = 0; i < 64 * 48; ++i) {
+    int32_t id;
+    float d;
+    std::memcpy(&id, ids.data() + 4 * i, 4);
+    std::memcpy(&d, depth.data() + 4 * i, 4);
+    if (id == -1) {
+      EXPECT_TRUE(std::isinf(d)) << i;
+      ++empty;
+    } else {
+      EXPECT_TRUE(id >= 0 && std::isfinite(d) && d > 0) << i << ": " << id << " " << d;
+      ++covered;
+    }
+  }
+  EXPECT_GT(covered, 0u);
+  EXPECT_GT(empty, 0u);
+}
+
+TEST_F(CommandLine, StatsJsonHasConventionKeys) {
+  Result r = hsr("render builtin:cubes --size 64x48 --threads 1 --stats s.json --verify");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_NE(r.out.find("verify"), std::string::npos) << r;
+  nlohmann::json stats = nlohmann::json::parse(readText(file("s.json")));
+  for (const char* key : {"algorithm", "width", "height", "faces", "triangles", "triangles_clipped", "culled_backface",
+                          "culled_frustum", "culled_occlusion", "depth_tests", "depth_writes", "color_writes",
+                          "covered_pixels", "overdraw", "memory_bytes", "time_ms", "wrong_pixels", "ambiguous_pixels"})
+    EXPECT_TRUE(stats.contains(key)) << key;
+  EXPECT_EQ(stats["algorithm"], "zbuffer");
+  EXPECT_EQ(stats["width"], 64);
+  EXPECT_EQ(stats["height"], 48);
+  EXPECT_TRUE(stats["time_ms"].is_object());
+
+  r = hsr("render builtin:cubes --size 64x48 --threads 1 --json");  // the same object on stdout
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["covered_pixels"], stats["covered_pixels"]);
+}
+
+TEST_F(CommandLine, BenchJsonHasTimesAndStatistics) {
+  Result r = hsr("bench builtin:cubes --frames 3 --json --size 64x48");
+  ASSERT_EQ(r.status, 0) << r;
+  nlohmann::json bench = nlohmann::json::parse(r.out);
+  EXPECT_EQ(bench["frames"], 3);
+  EXPECT_GT(bench["median_ms"].get<double>(), 0.0);
+  EXPECT_LE(bench["min_ms"].get<double>(), bench["median_ms"].get<double>());
+  EXPECT_EQ(bench["frame_ms"].size(), 3u);
+  EXPECT_GE(bench["threads"].get<int>(), 1);
+  EXPECT_EQ(bench["scene"], "builtin:cubes");
+  EXPECT_EQ(bench["width"], 64);
+  EXPECT_TRUE(bench.contains("covered_pixels"));
+}
+
+TEST_F(CommandLine, InfoDescribesScene) {
+  Result r = hsr("info builtin:cubes --json");
+  ASSERT_EQ(r.status, 0) << r;
+  nlohmann::json info = nlohmann::json::parse(r.out);
+  EXPECT_GT(info["faces"].get<int>(), 0);
+  EXPECT_GE(info["triangles"].get<int>(), info["faces"].get<int>());
+  EXPECT_FALSE(info["meshes"].empty());
+  EXPECT_TRUE(info["bounds"].contains("min"));
+  EXPECT_EQ(hsr("info builtin:cubes").status, 0);
+}
+
+TEST_F(CommandLine, BadUsageIsExitTwoWithOneLine) {
+  for (const char* args :
+       {"render builtin:cubes --bogus", "render builtin:cubes --size 0x5", "render builtin:cubes --size abc",
+        "render builtin:cubes --size 64x", "render builtin:cubes --size 16385x8", "render builtin:cubes --threads -1",
+        "render builtin:cubes --algorithm nonsense", "render builtin:cubes --cull sideways",
+        "render builtin:cubes --eye 1,2", "render builtin:cubes --fov nan", "render builtin:cubes --background 1,2,300",
+        "render builtin:cubes --depth d.tiff", "render", "bench builtin:cubes --frames 0", "help nonsense", ""}) {
+    Result r = hsr(args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r;
+    EXPECT_TRUE(r.oneErrorLine()) << args << "\n" << r;
+  }
+  EXPECT_TRUE(listing().empty());
+}
+
+TEST_F(CommandLine, MissingSceneFileIsNamed) {
+  Result r = hsr("render no_such_scene.obj -o c.png");
+  EXPECT_EQ(r.status, 2) << r;
+  EXPECT_TRUE(r.oneErrorLine()) << r;
+  EXPECT_NE(r.err.find("no_such_scene.obj"), std::string::npos) << r;
+  EXPECT_TRUE(listing().empty());
+}
+
+TEST_F(CommandLine, BadCameraFileIsNamedAndNothingWritten) {
+  writeFile("cam.json", "{\"eye\": [0, 0, 5], \"target\": [0, 0");
+  Result r = hsr("render builtin:cubes --camera cam.json -o c.png");
+  EXPECT_EQ(r.status, 2) << r;
+  EXPECT_TRUE(r.oneErrorLine()) << r;
+  EXPECT_NE(r.err.find("cam.json"), std::string::npos) << r;
+
+  r = hsr("render builtin:cubes --camera missing.json -o c.png");
+  EXPECT_EQ(r.status, 2) << r;
+  EXPECT_NE(r.err.find("missing.json"), std::string::npos) << r;
+  EXPECT_EQ(listing(), std::vector<std::string>{"cam.json"});
+}
+
+TEST_F(CommandLine, CameraFileAndFlags) {
+  writeFile("cam.json", R"({"eye": [0, 0, 12], "target": [0, 0, 0], "up": [0, 1, 0], "fovy_deg": 50})");
+  Result r = hsr("render builtin:cubes --camera cam.json --size 32x24 --threads 1 --json");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_GT(nlohmann::json::parse(r.out)["covered_pixels"].get<int>(), 0);
+  // Flags override the file: looking away from the scene sees nothing.
+  r = hsr("render builtin:cubes --camera cam.json --target 0,0,100 --size 32x24 --threads 1 --json");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["covered_pixels"], 0);
+  // A degenerate camera from the flags is bad input.
+  r = hsr("render builtin:cubes --eye 1,1,1 --target 1,1,1");
+  EXPECT_EQ(r.status, 2) << r;
+  EXPECT_TRUE(r.oneErrorLine()) << r;
+}
+
+TEST_F(CommandLine, UnwritableOutputIsExitOne) {
+  Result r = hsr("render builtin:cubes --size 16x16 -o no/such/dir/c.png");
+  EXPECT_EQ(r.status, 1) << r;
+  EXPECT_TRUE(r.oneErrorLine()) << r;
+  EXPECT_NE(r.err.find("no/such/dir/c.png"), std::string::npos) << r;
+  EXPECT_TRUE(listing().empty());
+}
