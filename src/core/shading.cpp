@@ -24,12 +24,19 @@ Rgba8 TriangleShader::operator()(uint32_t t) const {
   if (shading_ == Shading::FaceId) return faceIdColor(tri.face);
   Rgba8 base = scene_.faceColors[tri.face];
   if (shading_ == Shading::Flat) return base;
-  // Headlight: light from the eye; two-sided, so |cos| of the angle between normal and view ray.
+  // Headlight: light from the eye; two-sided, so |cos| of the angle between the face normal and
+  // the view ray to the face's centroid. Per face, so a polygon's triangles shade alike.
   const dvec3& a = scene_.positions[tri.v[0]];
   const dvec3& b = scene_.positions[tri.v[1]];
   const dvec3& c = scene_.positions[tri.v[2]];
   dvec3 n = glm::cross(b - a, c - a);
-  dvec3 view = orthographic_ ? forward_ : (a - eye_) + ((b - a) + (c - a)) / 3.0;
+  dvec3 view = forward_;
+  if (!orthographic_) {
+    dvec3 centroid{0.0};
+    auto polygon = scene_.face(tri.face);
+    for (uint32_t v : polygon) centroid += scene_.positions[v] - a;
+    view = (a - eye_) + centroid / double(polygon.size());
+  }
   double ln = glm::length(n) * glm::length(view);
   double cosine = ln > 0 ? std::abs(glm::dot(n, view)) / ln : 1.0;
   double k = 0.25 + 0.75 * cosine;
