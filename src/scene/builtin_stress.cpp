@@ -1,0 +1,251 @@
+// Built-in parametric scenes for measurement: random intersecting triangles (000, 001), a
+// geodesic sphere of about a million triangles, stacked screen-filling layers (overdraw) and a
+// city seen from the street (occlusion). Called by makeBuiltin() (builtin.cpp).
+//
+// Random numbers come from builtin::Random (a standard engine with our own real mapping) and
+// geometry uses only +, *, / and sqrt, so every platform builds bit-identical scenes.
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "scene/builtin_internal.hpp"
+
+#ifdef __clang__
+#pragma STDC FP_CONTRACT OFF  // no fused multiply-add: the same bits as GCC's ISO mode
+#endif
+
+namespace hsr::builtin {
+namespace {
+
+// Reserves room for `faces` faces of `corners` corners each and `vertices` more positions, so
+// large scenes grow without reallocation.
+void reserve(Scene& scene, size_t faces, size_t corners, size_t vertices) {
+  scene.positions.reserve(scene.positions.size() + vertices);
+  scene.polygonIndices.reserve(scene.polygonIndices.size() + faces * corners);
+  scene.polygonOffsets.reserve(scene.polygonOffsets.size() + faces);
+  scene.faceColors.reserve(scene.faceColors.size() + faces);
+}
+
+}  // namespace
+
+// N triangles with random centres in a box (2.67 x 2 x 2, the image's 4:3) and random
+// orientations. Each triangle's corners lie near 0, 120 and 240 degrees on its circumcircle,
+// jittered within the circle, so no triangle is a sliver; with the default size many pierce
+// each other.
+Scene makeRandom(const Args& args) {
+  const auto n = size_t(args.integer("n"));
+  const double radius = args.real("size") * 2;  // fraction of the box height
+  const dvec3 halfBox(4.0 / 3, 1, 1);
+  const double root3half = std::sqrt(3.0) / 2;
+  const dvec2 spoke[3] = {{1, 0}, {-0.5, root3half}, {-0.5, -root3half}};
+
+  Random random(uint64_t(args.integer("seed")));
+  Scene scene;
+  reserve(scene, n, 3, 3 * n);
+  scene.beginMesh("triangles");
+  for (size_t t = 0; t < n; ++t) {
+    // One draw per statement: the order of evaluation of function arguments is unspecified.
+    dvec3 center;
+    for (int axis = 0; axis < 3; ++axis)
+      center[axis] = random.uniform(-halfBox[axis], halfBox[axis]);
+    // An orthonormal frame (u, v) of a random plane through the centre.
+    const dvec3 normal = random.unitVector();
+    dvec3 u;
+    do {
+      const dvec3 other = random.unitVector();
+      u = other - normal * glm::dot(normal, other);
+    } while (glm::dot(u, u) < 0.01);
+    u = glm::normalize(u);
+    const dvec3 v = glm::cross(normal, u);
+
+    const auto first = uint32_t(scene.positions.size());
+    for (const dvec2& s : spoke) {
+      dvec2 jitter;
+      do {
+        jitter.x = random.uniform(-1, 1);
+        jitter.y = random.uniform(-1, 1);
+      } while (glm::dot(jitter, jitter) > 1);
+      const dvec2 p = 0.75 * s + 0.25 * jitter;  // within the circumcircle
+      scene.positions.push_back(center + radius * (p.x * u + p.y * v));
+    }
+    scene.addFace({first, first + 1, first + 2}, paletteColor(t));
+  }
+  scene.camera = perspectiveCamera({0, 0, 4.5}, {0, 0, 0}, 45, 0.5, 10);
+  return scene;
+}
+
+// A unit geodesic sphere: each face of an icosahedron divided into k x k triangles, the points
+// pushed onto the sphere. 20 k^2 triangles (k chosen nearest to the target n), 10 k^2 + 2
+// shared vertices: a closed, watertight mesh, wound counter-clockwise seen from outside. Each
+// icosahedron face keeps one colour, so the 20 patches show the structure.
+Scene makeSphere(const Args& args) {
+  const auto target = double(args.integer("n"));
+  int64_t k = std::max<int64_t>(1, int64_t(std::sqrt(target / 20)));
+  if (std::abs(20.0 * double((k + 1) * (k + 1)) - target) <
+          std::abs(20.0 * double(k * k) - target) &&
+      20 * (k + 1) * (k + 1) <= kMaxTriangles)
+    k += 1;
+
+  // The icosahedron: corners (0, +-1, +-phi) and cyclic permutations; faces counter-clockwise
+  // seen from outside.
+  const double phi = (1 + std::sqrt(5.0)) / 2;
+  const dvec3 corners[12] = {{-1, phi, 0}, {1, phi, 0}, {-1, -phi, 0}, {1, -phi, 0},
+                             {0, -1, phi}, {0, 1, phi}, {0, -1, -phi}, {0, 1, -phi},
+                             {phi, 0, -1}, {phi, 0, 1}, {-phi, 0, -1}, {-phi, 0, 1}};
+  static constexpr uint32_t kFaces[20][3] = {
+      {0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+      {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+      {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+
+  const auto K = uint32_t(k);
+  Scene scene;
+  reserve(scene, size_t(20) * K * K, 3, size_t(10) * K * K + 2);
+  const auto onSphere = [&](uint32_t a, uint32_t b, uint32_t c, uint32_t i, uint32_t j) {
+    // Point (i, j) of face (a, b, c): a + (b - a) i/k + (c - a) j/k, then normalised.
+    const dvec3 p = corners[a] + (corners[b] - corners[a]) * (double(i) / K) +
+                    (corners[c] - corners[a]) * (double(j) / K);
+    return p / std::sqrt(glm::dot(p, p));
+  };
+
+  // Vertices: the 12 corners, then k - 1 inner points per edge (numbered from the edge's lower
+  // corner), then each face's interior points as the faces are triangulated.
+  for (uint32_t c = 0; c < 12; ++c) scene.positions.push_back(onSphere(c, c, c, 0, 0));
+  int edgeId[12][12];
+  for (auto& row : edgeId) std::fill(std::begin(row), std::end(row), -1);
+  int edges = 0;
+  for (const auto& f : kFaces)
+    for (int e = 0; e < 3; ++e) {
+      const uint32_t a = std::min(f[e], f[(e + 1) % 3]), b = std::max(f[e], f[(e + 1) % 3]);
+      if (edgeId[a][b] >= 0) continue;
+      edgeId[a][b] = edgeId[b][a] = edges++;
+      for (uint32_t t = 1; t < K; ++t) scene.positions.push_back(onSphere(a, b, a, t, 0));
+    }
+  // Index of the point t steps from corner `from` towards corner `to` (0 <= t <= k).
+  const auto edgePoint = [&](uint32_t from, uint32_t to, uint32_t t) -> uint32_t {
+    if (t == 0) return from;
+    if (t == K) return to;
+    const uint32_t base = 12 + uint32_t(edgeId[from][to]) * (K - 1);
+    return from < to ? base + t - 1 : base + (K - t) - 1;
+  };
+
+  // Per face, a triangular grid of vertex indices: row j holds points (0..k-j, j).
+  std::vector<uint32_t> rowStart(K + 2);
+  for (uint32_t j = 0; j <= K; ++j) rowStart[j + 1] = rowStart[j] + (K + 1 - j);
+  std::vector<uint32_t> grid(rowStart[K + 1]);
+  scene.beginMesh("sphere");
+  for (uint32_t f = 0; f < 20; ++f) {
+    const uint32_t a = kFaces[f][0], b = kFaces[f][1], c = kFaces[f][2];
+    for (uint32_t j = 0; j <= K; ++j)
+      for (uint32_t i = 0; i + j <= K; ++i) {
+        uint32_t& index = grid[rowStart[j] + i];
+        if (j == 0)
+          index = edgePoint(a, b, i);
+        else if (i == 0)
+          index = edgePoint(a, c, j);
+        else if (i + j == K)
+          index = edgePoint(b, c, j);
+        else {
+          index = uint32_t(scene.positions.size());
+          scene.positions.push_back(onSphere(a, b, c, i, j));
+        }
+      }
+    const Rgba8 color = paletteColor(f);
+    const auto at = [&](uint32_t i, uint32_t j) { return grid[rowStart[j] + i]; };
+    for (uint32_t j = 0; j < K; ++j)
+      for (uint32_t i = 0; i + j < K; ++i) {
+        // "Up" triangle, then the "down" one sharing its right edge: both keep (a, b, c)'s
+        // orientation.
+        scene.addFace({at(i, j), at(i + 1, j), at(i, j + 1)}, color);
+        if (i + j + 1 < K) scene.addFace({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)}, color);
+      }
+  }
+  scene.camera = perspectiveCamera({1.6, 1.0, 2.4}, {0, 0, 0}, 45, 1, 5);
+  return scene;
+}
+
+// N quads facing the camera at eye depths evenly spaced in [2, 10]. Each is 2.5 times as tall
+// as the 60-degree view at its depth and 4 times as wide as tall, so every pixel of any image
+// with an aspect ratio up to 4:1 (with a margin) sees all N. Submitted back to front, front to
+// back or shuffled.
+Scene makeLayers(const Args& args) {
+  const auto n = uint32_t(args.integer("n"));
+  const std::string& order = args.text("order");
+  const double tanHalfFov = std::sqrt(3.0) / 3;  // tan(30 degrees)
+  const double nearest = 2, farthest = 10;
+
+  // Depth rank (0 = nearest) of each submitted layer.
+  std::vector<uint32_t> ranks(n);
+  std::iota(ranks.begin(), ranks.end(), 0u);
+  if (order == "back-to-front") {
+    std::reverse(ranks.begin(), ranks.end());
+  } else if (order == "random") {
+    // Fisher-Yates with our own portable index draw (std::shuffle varies between libraries).
+    Random random(uint64_t(args.integer("seed")));
+    for (uint32_t i = n; i > 1; --i) std::swap(ranks[i - 1], ranks[random.below(i)]);
+  }
+
+  Scene scene;
+  reserve(scene, n, 4, size_t(4) * n);
+  for (uint32_t rank : ranks) {
+    const double depth = n > 1 ? nearest + (farthest - nearest) * rank / (n - 1) : nearest;
+    const double halfY = 1.25 * tanHalfFov * depth, halfX = 4 * halfY;
+    scene.beginMesh("layer" + std::to_string(rank));
+    addPolygon(scene,
+               {{-halfX, -halfY, -depth},
+                {halfX, -halfY, -depth},
+                {halfX, halfY, -depth},
+                {-halfX, halfY, -depth}},
+               paletteColor(rank));
+  }
+  scene.camera = perspectiveCamera({0, 0, 0}, {0, 0, -1}, 60, 1, 11);
+  return scene;
+}
+
+// A city of blocks x blocks blocks, 60 m apart with 12 m streets between them; each block holds
+// 2 x 2 lots with one box building each (random setbacks, mostly 6-40 m tall, some towers up to
+// 150 m). The camera stands 1.7 m above a street crossing at the city's edge, looking down the
+// middle avenue, turned 5 degrees towards the facades: nearly everything is hidden.
+Scene makeCity(const Args& args) {
+  const auto blocks = uint32_t(args.integer("blocks"));
+  const double pitch = 60, street = 12, lot = (pitch - street) / 2, size = blocks * pitch;
+  Random random(uint64_t(args.integer("seed")));
+  Scene scene;
+  reserve(scene, size_t(6) * 4 * blocks * blocks + 1, 4, size_t(8) * 4 * blocks * blocks + 4);
+
+  // The ground, counter-clockwise seen from above, reaching one block pitch beyond the city.
+  scene.beginMesh("ground");
+  const double lo = -pitch, hi = size + pitch;
+  addPolygon(scene, {{lo, 0, lo}, {lo, 0, hi}, {hi, 0, hi}, {hi, 0, lo}},
+             Rgba8{105, 110, 100, 255});
+
+  const dmat3 upright(1.0);
+  uint64_t building = 0;
+  for (uint32_t bz = 0; bz < blocks; ++bz)
+    for (uint32_t bx = 0; bx < blocks; ++bx)
+      for (int lotIndex = 0; lotIndex < 4; ++lotIndex) {
+        const double x0 = bx * pitch + street / 2 + (lotIndex & 1) * lot;
+        const double z0 = bz * pitch + street / 2 + (lotIndex >> 1) * lot;
+        const double west = random.uniform(0.5, 4);
+        const double east = random.uniform(0.5, 4);
+        const double north = random.uniform(0.5, 4);
+        const double south = random.uniform(0.5, 4);
+        const double u = random.uniform();
+        const bool tower = random.uniform() < 0.06;
+        const double height = tower ? 50 + 100 * random.uniform() : 6 + 34 * u * u;
+        const dvec3 lowCorner(x0 + west, 0, z0 + north),
+            highCorner(x0 + lot - east, height, z0 + lot - south);
+        scene.beginMesh("building" + std::to_string(building));
+        const Rgba8 base = paletteColor(building++, 0.3, 0.85);
+        addBox(scene, (lowCorner + highCorner) * 0.5, upright, (highCorner - lowCorner) * 0.5,
+               [&](int k) { return shade(base, faceShade(k)); });
+      }
+
+  // Looking along -z down the avenue x = (blocks / 2) * pitch; the direction (-0.0875, 0, -1)
+  // is turned 5 degrees to the left.
+  const dvec3 eye((blocks / 2) * pitch, 1.7, size);
+  scene.camera =
+      perspectiveCamera(eye, eye + dvec3(-0.0875, 0, -1) * 100.0, 60, 0.25, 1.5 * size + 2 * pitch);
+  return scene;
+}
+
+}  // namespace hsr::builtin
