@@ -17,6 +17,8 @@ inline nlohmann::json parseJsonOrThrow(const std::string& text, const std::strin
     std::string what = e.what();
     auto pos = what.find("parse error");
     throw InputError(src + ":" + std::to_string(line) + ": JSON " + (pos == std::string::npos ? what : what.substr(pos)));
+  } catch (const nlohmann::json::exception& e) {  // e.g. a number too large for a double
+    throw InputError(src + ": JSON " + e.what());
   }
 }
 

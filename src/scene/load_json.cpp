@@ -1,0 +1,225 @@
+// Scene JSON: a list of meshes (files or built-in scenes), each placed by a transform and
+// optionally recoloured, plus an optional camera. Produces an unfinalized Scene for
+// loadScene() (load.cpp); the format is documented in docs/scene-json.md.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "core/json_util.hpp"
+#include "scene/loaders.hpp"
+
+namespace hsr::loaders {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+// Scene files may include scene files; a deeper nest is almost surely a mistake, and a bound
+// keeps repeated inclusion from growing exponentially.
+constexpr size_t kMaxNesting = 8;
+
+/// Reads one mesh entry's fields, with errors "file: meshes[i].key: problem".
+class EntryReader {
+ public:
+  EntryReader(const std::string& path, size_t index, const json& entry)
+      : where_(path + ": meshes[" + std::to_string(index) + "]"), entry_(entry) {}
+
+  [[noreturn]] void fail(const std::string& key, const std::string& problem) const {
+    throw InputError(where_ + (key.empty() ? "" : "." + key) + ": " + problem);
+  }
+
+  bool has(const char* key) const { return entry_.contains(key); }
+
+  std::string string(const char* key) const {
+    const json& v = entry_.at(key);
+    if (!v.is_string()) fail(key, "must be a string");
+    return v.get<std::string>();
+  }
+
+  double number(const json& v, const char* key) const {
+    if (!v.is_number()) fail(key, "must be a number");
+    double d = v.get<double>();
+    if (!std::isfinite(d)) fail(key, "must be finite");
+    return d;
+  }
+  double number(const char* key) const { return number(entry_.at(key), key); }
+
+  /// An array of `n` numbers.
+  std::vector<double> numbers(const json& v, const char* key, size_t minCount, size_t maxCount) const {
+    std::string count = minCount == maxCount ? std::to_string(minCount)
+                                             : std::to_string(minCount) + " or " + std::to_string(maxCount);
+    if (!v.is_array() || v.size() < minCount || v.size() > maxCount)
+      fail(key, "must be an array of " + count + " numbers");
+    std::vector<double> out;
+    for (const json& x : v) out.push_back(number(x, key));
+    return out;
+  }
+  dvec3 vec3(const char* key) const {
+    std::vector<double> v = numbers(entry_.at(key), key, 3, 3);
+    return {v[0], v[1], v[2]};
+  }
+
+  /// worldFromMesh: either "transform" (4x4 row-major, affine) or translate * rotate * scale.
+  dmat4 transform() const {
+    const bool trs = has("translate") || has("rotate_deg") || has("scale");
+    if (has("transform")) {
+      if (trs) fail("transform", "give either 'transform' or 'translate'/'rotate_deg'/'scale', not both");
+      const json& rows = entry_.at("transform");
+      if (!rows.is_array() || rows.size() != 4) fail("transform", "must be 4 rows of 4 numbers (row-major)");
+      dmat4 m;
+      for (int r = 0; r < 4; ++r) {
+        std::vector<double> row = numbers(rows[size_t(r)], "transform", 4, 4);
+        for (int c = 0; c < 4; ++c) m[c][r] = row[size_t(c)];
+      }
+      if (m[0][3] != 0 || m[1][3] != 0 || m[2][3] != 0 || m[3][3] != 1)
+        fail("transform", "the last row must be [0, 0, 0, 1] (affine transforms only)");
+      return m;
+    }
+    dmat4 m(1.0);
+    if (has("translate")) m = glm::translate(m, vec3("translate"));
+    if (has("rotate_deg")) {
+      // Rotation about x first, then y, then z (world axes): R = Rz * Ry * Rx.
+      dvec3 deg = vec3("rotate_deg");
+      m = glm::rotate(m, glm::radians(deg.z), dvec3(0, 0, 1));
+      m = glm::rotate(m, glm::radians(deg.y), dvec3(0, 1, 0));
+      m = glm::rotate(m, glm::radians(deg.x), dvec3(1, 0, 0));
+    }
+    if (has("scale")) {
+      const json& s = entry_.at("scale");
+      m = glm::scale(m, s.is_array() ? vec3("scale") : dvec3(number("scale")));
+    }
+    return m;
+  }
+
+  /// "color": [r, g, b(, a)], all in [0, 1] or else all in [0, 255].
+  Rgba8 color() const {
+    std::vector<double> c = numbers(entry_.at("color"), "color", 3, 4);
+    const bool unit = std::all_of(c.begin(), c.end(), [](double v) { return v <= 1.0; });
+    for (double v : c)
+      if (v < 0 || v > 255) fail("color", "components must be in [0, 1] or [0, 255]");
+    auto channel = [&](size_t i) { return unitToByte(unit ? c[i] : c[i] / 255.0); };
+    return Rgba8{channel(0), channel(1), channel(2), c.size() == 4 ? channel(3) : uint8_t(255)};
+  }
+
+  uint8_t opacity() const {
+    double v = number("opacity");
+    if (v < 0 || v > 1) fail("opacity", "must be in [0, 1]");
+    return unitToByte(v);
+  }
+
+  void checkKeys() const {
+    static constexpr std::string_view kKnown[] = {"file", "builtin", "name", "transform", "translate",
+                                                  "rotate_deg", "scale", "color", "opacity"};
+    if (!entry_.is_object()) fail("", "must be an object");
+    for (const auto& item : entry_.items())
+      if (std::find(std::begin(kKnown), std::end(kKnown), item.key()) == std::end(kKnown))
+        fail("", "unknown key " + quote(item.key()));
+    if (has("file") == has("builtin")) fail("", "needs exactly one of 'file' and 'builtin'");
+  }
+
+ private:
+  std::string where_;
+  const json& entry_;
+};
+
+/// Appends `sub` to `scene`: positions through worldFromMesh, faces in order, mesh ranges
+/// renamed under `prefix` (when given), colours overridden where asked.
+void append(Scene& scene, const Scene& sub, const dmat4& worldFromMesh, const std::string& prefix,
+            const std::optional<Rgba8>& color, const std::optional<uint8_t>& alpha) {
+  if (scene.positions.size() + sub.positions.size() > std::numeric_limits<uint32_t>::max())
+    throw InputError(scene.source + ": more than 2^32 vertices");
+  const uint32_t base = uint32_t(scene.positions.size());
+  for (const dvec3& p : sub.positions) scene.positions.push_back(dvec3(worldFromMesh * dvec4(p, 1.0)));
+
+  // Mesh ranges of the sub-scene (it is not finalized: faces before its first range get one).
+  std::vector<MeshRange> ranges = sub.meshes;
+  if (ranges.empty() || ranges.front().firstFace != 0)
+    ranges.insert(ranges.begin(), MeshRange{fs::path(sub.source).stem().string(), 0, 0});
+  auto rangeName = [&](const MeshRange& r) {
+    if (prefix.empty()) return r.name;
+    return ranges.size() == 1 ? prefix : prefix + "/" + r.name;
+  };
+
+  std::vector<uint32_t> indices;
+  size_t nextRange = 0;
+  for (size_t f = 0; f < sub.faceCount(); ++f) {
+    for (; nextRange < ranges.size() && ranges[nextRange].firstFace <= f; ++nextRange)
+      scene.beginMesh(rangeName(ranges[nextRange]));
+    indices.clear();
+    for (uint32_t v : sub.face(f)) indices.push_back(base + v);
+    Rgba8 c = color ? *color : sub.faceColors[f];
+    if (alpha) c.a = *alpha;
+    scene.addFace(indices, c);
+  }
+  scene.problems.notes.insert(scene.problems.notes.end(), sub.problems.notes.begin(), sub.problems.notes.end());
+}
+
+}  // namespace
+
+Scene loadSceneJson(const std::string& path, std::string_view bytes, LoadContext& context) {
+  std::error_code ec;
+  std::string canonical = fs::weakly_canonical(path, ec).string();
+  if (ec) canonical = path;
+  if (std::find(context.openJsonFiles.begin(), context.openJsonFiles.end(), canonical) != context.openJsonFiles.end())
+    throw InputError(path + ": the scene file includes itself");
+  if (context.openJsonFiles.size() >= kMaxNesting)
+    throw InputError(path + ": scene files nested more than " + std::to_string(kMaxNesting) + " deep");
+  context.openJsonFiles.push_back(canonical);
+  struct Pop {
+    LoadContext& c;
+    ~Pop() { c.openJsonFiles.pop_back(); }
+  } pop{context};
+
+  json root;
+  try {
+    root = parseJsonOrThrow(std::string(bytes), path);
+  } catch (const json::out_of_range&) {  // a number too large for a double: no position given
+    throw InputError(path + ": JSON number out of range");
+  }
+  if (!root.is_object()) throw InputError(path + ": a scene file must be a JSON object");
+  for (const auto& item : root.items())
+    if (item.key() != "meshes" && item.key() != "camera")
+      throw InputError(path + ": unknown key " + quote(item.key()) + " (expected 'meshes' and 'camera')");
+  if (!root.contains("meshes") || !root.at("meshes").is_array() || root.at("meshes").empty())
+    throw InputError(path + ": 'meshes' must be a non-empty array");
+
+  Scene scene;
+  scene.source = path;
+  const fs::path folder = fs::path(path).parent_path();
+  const json& meshes = root.at("meshes");
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    EntryReader entry(path, i, meshes[i]);
+    entry.checkKeys();
+    const dmat4 worldFromMesh = entry.transform();
+    std::optional<Rgba8> color;
+    std::optional<uint8_t> alpha;
+    if (entry.has("color")) color = entry.color();
+    if (entry.has("opacity")) alpha = entry.opacity();
+    std::string name = entry.has("name") ? entry.string("name") : "";
+
+    Scene sub;
+    if (entry.has("file")) {
+      std::string file = entry.string("file");
+      if (file.empty()) entry.fail("file", "is empty");
+      sub = loadAny(fs::path(file).is_absolute() ? file : (folder / file).string(), context);
+    } else {
+      const std::string spec = "builtin:" + entry.string("builtin");
+      try {
+        sub = loadAny(spec, context);
+      } catch (const InputError& e) {  // a built-in scene is no file: say where it was named
+        entry.fail("builtin", e.what());
+      }
+      sub.problems = {};  // generated finalized: the merged scene's finalize() redoes its findings
+    }
+    append(scene, sub, worldFromMesh, name, color, alpha);
+  }
+
+  if (root.contains("camera")) {
+    if (!root.at("camera").is_object()) throw InputError(path + ": 'camera' must be an object");
+    scene.camera = parseCameraJson(root.at("camera").dump(), path);
+  }
+  return scene;
+}
+
+}  // namespace hsr::loaders

@@ -1,0 +1,98 @@
+// Internal interface of the scene loaders: one entry point per format (load_*.cpp), the file
+// reading and text scanning they share, and the "file:line: problem" error helpers.
+// Consumed only by the loaders themselves (load*.cpp); the public entry point is loadScene().
+#pragma once
+#include <hsr/scene.hpp>
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace hsr::loaders {
+
+/// Colour of faces whose file gives none.
+inline constexpr Rgba8 kDefaultColor{200, 200, 200, 255};
+
+/// Scene JSON nesting: the files being loaded (outermost first), to catch a JSON that includes
+/// itself and to bound the nesting depth.
+struct LoadContext {
+  std::vector<std::string> openJsonFiles;  // canonical paths
+};
+
+/// Loads any scene (builtin:, .json, mesh file). Not finalized unless it comes from a
+/// generator that finalizes (builtin:). loadScene() is this plus finalize().
+Scene loadAny(const std::string& path, LoadContext& context);
+
+// The format loaders. Each fills positions, faces (in file order), colours, mesh ranges and
+// loader notes; none finalizes. `bytes` is the whole file.
+Scene loadObj(const std::string& path, std::string_view bytes);
+Scene loadPly(const std::string& path, std::string_view bytes);
+Scene loadStl(const std::string& path, std::string_view bytes);
+Scene loadOff(const std::string& path, std::string_view bytes);
+Scene loadAssimp(const std::string& path);
+Scene loadSceneJson(const std::string& path, std::string_view bytes, LoadContext& context);
+
+/// Reads a whole file. Throws InputError "path: file not found", "path: is a directory, not a
+/// file", "path: file is empty" or "path: cannot open file (reason)".
+std::string readFile(const std::string& path);
+
+/// Maps a colour channel in [0, 1] to 0..255 (clamped, NaN -> 0).
+uint8_t unitToByte(double v);
+/// Sets every face's colour to the mean of its vertices' colours (one per position).
+void averageVertexColors(Scene& scene, const std::vector<Rgba8>& vertexColors);
+
+/// Parses a whole token as a finite double (also accepts a leading '+', which from_chars does
+/// not). Returns false for anything else, including nan, inf and out-of-range values.
+bool parseDouble(std::string_view token, double& value);
+/// Parses a whole token as a decimal integer (optional sign).
+bool parseInt(std::string_view token, long long& value);
+/// A token for an error message: quoted, shortened, non-printable bytes replaced.
+std::string quote(std::string_view token);
+/// Case-insensitive ASCII comparison.
+bool iequals(std::string_view a, std::string_view b);
+
+/// A cursor over a text file for the line-oriented formats (OBJ, MTL, OFF, ASCII PLY, ASCII
+/// STL), tracking line numbers for "file:line: problem" errors.
+class TextScanner {
+ public:
+  /// hashComments: '#' starts a comment that runs to the end of the line.
+  /// lineContinuation: a backslash right before the end of a line joins the next line (OBJ).
+  TextScanner(std::string_view text, std::string file, bool hashComments, bool lineContinuation,
+              size_t firstLine = 1);
+
+  /// The next token on the current line; empty at the end of the line.
+  std::string_view token();
+  /// The rest of the current line, trimmed (comment removed); the line is consumed.
+  std::string_view restOfLine();
+  /// The next token anywhere after the cursor (crossing line ends); empty at the end of text.
+  std::string_view anyToken();
+  /// Moves to the start of the next line. False at the end of the text.
+  bool nextLine();
+  /// Byte offset of the cursor (where binary data starts after a PLY header).
+  size_t offset() const { return pos_; }
+
+  /// Line number of the last token returned (or of the cursor before any token on this line).
+  size_t line() const { return tokenLine_; }
+  const std::string& file() const { return file_; }
+
+  /// The next token on the line as a finite double / integer; throws "file:line: expected
+  /// WHAT" when the line has ended, or "file:line: bad WHAT 'token'".
+  double number(const char* what);
+  long long integer(const char* what);
+  /// Throws unless the line has no more tokens.
+  void expectLineEnd(const char* after);
+  /// Throws InputError "file:line: problem" at line().
+  [[noreturn]] void fail(const std::string& problem) const;
+
+ private:
+  void skipBlanks(bool crossLines);
+
+  std::string_view text_;
+  std::string file_;
+  bool hashComments_, lineContinuation_;
+  size_t pos_ = 0;
+  size_t line_;       // line of pos_
+  size_t tokenLine_;  // line of the last token
+};
+
+}  // namespace hsr::loaders

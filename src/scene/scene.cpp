@@ -1,0 +1,124 @@
+// The scene model: building polygons, then finalize() — validation and the triangulation every
+// rasterizer consumes (convex polygons as fans, concave ones by ear clipping in the polygon's
+// best-fit plane). Called by the loaders and the built-in generators; runs on the caller's thread.
+#include <hsr/scene.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "scene/triangulate.hpp"
+
+namespace hsr {
+namespace {
+
+// Coordinates beyond this magnitude are refused: squared lengths and cross products of such
+// values (taken by every algorithm) would overflow a double.
+constexpr double kMaxCoordinate = 1e30;
+// Notes kept per kind of problem; the rest are only counted.
+constexpr uint64_t kMaxNotesPerKind = 5;
+
+std::string faceLabel(size_t f) { return "face " + std::to_string(f); }
+
+/// Adds the note made by `text()` while fewer than kMaxNotesPerKind of its kind were seen.
+template <class MakeText>
+void noteProblem(SceneProblems& problems, uint64_t count, MakeText&& text) {
+  if (count <= kMaxNotesPerKind) problems.notes.push_back(text());
+}
+
+}  // namespace
+
+void Scene::addFace(std::span<const uint32_t> indices, Rgba8 color) {
+  // Offsets are 32-bit: refuse a scene whose index list would overflow them.
+  if (polygonIndices.size() + indices.size() > std::numeric_limits<uint32_t>::max())
+    throw InputError(source + ": too many polygon vertices (more than 2^32)");
+  polygonIndices.insert(polygonIndices.end(), indices.begin(), indices.end());
+  polygonOffsets.push_back(uint32_t(polygonIndices.size()));
+  faceColors.push_back(color);
+}
+
+void Scene::beginMesh(std::string name) {
+  uint32_t first = uint32_t(faceCount());
+  if (!meshes.empty()) meshes.back().faceCount = first - meshes.back().firstFace;
+  meshes.push_back({std::move(name), first, 0});
+}
+
+void Scene::finalize() {
+  if (polygonOffsets.empty() || polygonOffsets.front() != 0 ||
+      polygonOffsets.back() != polygonIndices.size() || faceColors.size() != faceCount())
+    throw std::logic_error(source + ": Scene::finalize: polygon arrays are inconsistent");
+
+  // Validation: every position finite and of sane magnitude.
+  for (size_t i = 0; i < positions.size(); ++i) {
+    const dvec3& p = positions[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw InputError(source + ": vertex " + std::to_string(i) + " has a non-finite coordinate");
+    if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kMaxCoordinate)
+      throw InputError(source + ": vertex " + std::to_string(i) +
+                       " has a coordinate beyond 1e30 in magnitude");
+  }
+
+  // Triangulation, face by face in order, so each face's triangles are together.
+  triangles.clear();
+  triangles.reserve(polygonIndices.size() > 2 * faceCount() ? polygonIndices.size() - 2 * faceCount() : 0);
+  problems.degenerateFaces = problems.nonPlanarFaces = problems.concaveFaces = 0;
+  Triangulator triangulator;
+  uint64_t approximateFaces = 0;
+  const size_t vertexCount = positions.size();
+  for (size_t f = 0; f < faceCount(); ++f) {
+    std::span<const uint32_t> poly = face(f);
+    for (uint32_t v : poly)
+      if (v >= vertexCount)
+        throw InputError(source + ": " + faceLabel(f) + ": vertex index " + std::to_string(v) +
+                         " out of range (" + std::to_string(vertexCount) + " vertices)");
+    PolygonReport report = triangulator.run(positions, poly, uint32_t(f), triangles);
+    if (report.degenerate) {
+      ++problems.degenerateFaces;
+      noteProblem(problems, problems.degenerateFaces,
+                  [&] { return faceLabel(f) + ": degenerate (" + report.degenerateReason + "), not drawn"; });
+      continue;
+    }
+    if (report.nonPlanar) {
+      ++problems.nonPlanarFaces;
+      noteProblem(problems, problems.nonPlanarFaces, [&] {
+        return fmt::format("{}: non-planar (a vertex lies {:.3g} from the best-fit plane), triangulated anyway",
+                           faceLabel(f), report.planeDistance);
+      });
+    }
+    if (report.concave) ++problems.concaveFaces;
+    if (report.approximate)
+      noteProblem(problems, ++approximateFaces, [&] {
+        return faceLabel(f) + ": too tangled to triangulate exactly (" + std::to_string(poly.size()) +
+               " vertices, self-intersecting?): some of its triangles may overlap";
+      });
+  }
+  for (auto [count, kind] : {std::pair{problems.degenerateFaces, "degenerate"},
+                              std::pair{problems.nonPlanarFaces, "non-planar"}, std::pair{approximateFaces, "tangled"}})
+    if (count > kMaxNotesPerKind) problems.notes.push_back(fmt::format("{} {} faces in all", count, kind));
+
+  // Mesh ranges: a leading range for faces added before the first beginMesh() (or all faces
+  // when none was begun), counts recomputed from the starts, empty ranges dropped.
+  const uint32_t total = uint32_t(faceCount());
+  if (meshes.empty() || meshes.front().firstFace != 0)
+    meshes.insert(meshes.begin(), MeshRange{std::filesystem::path(source).stem().string(), 0, 0});
+  for (size_t m = 0; m < meshes.size(); ++m) {
+    uint32_t end = m + 1 < meshes.size() ? meshes[m + 1].firstFace : total;
+    if (end < meshes[m].firstFace || end > total)
+      throw std::logic_error(source + ": Scene::finalize: mesh ranges out of order");
+    meshes[m].faceCount = end - meshes[m].firstFace;
+  }
+  std::erase_if(meshes, [](const MeshRange& m) { return m.faceCount == 0; });
+}
+
+Bounds3 Scene::bounds() const {
+  Bounds3 b;
+  for (uint32_t v : polygonIndices)
+    if (v < positions.size()) b.add(positions[v]);
+  return b;
+}
+
+}  // namespace hsr
