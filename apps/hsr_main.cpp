@@ -112,7 +112,8 @@ const CLI::Validator kPositive(
 
 template <class Enum>
 using Names = std::vector<std::pair<std::string, Enum>>;
-const Names<hsr::RasterKind> kRasterNames{{"halfspace", hsr::RasterKind::HalfSpace}, {"scanline", hsr::RasterKind::Scanline}};
+const Names<hsr::RasterKind> kRasterNames{
+    {"tiled", hsr::RasterKind::Tiled}, {"halfspace", hsr::RasterKind::HalfSpace}, {"scanline", hsr::RasterKind::Scanline}};
 const Names<hsr::Cull> kCullNames{{"none", hsr::Cull::None}, {"back", hsr::Cull::Back}, {"front", hsr::Cull::Front}};
 const Names<hsr::Shading> kShadingNames{
     {"lambert", hsr::Shading::Lambert}, {"flat", hsr::Shading::Flat}, {"faceid", hsr::Shading::FaceId}};
@@ -157,7 +158,8 @@ std::string algorithmNames() {
 
 struct ViewFlags {
   std::string scene, cameraFile, size = "1280x720", depthFormat, background;
-  std::string raster = "halfspace", cull = "none", shading = "lambert";
+  std::string raster = "tiled", cull = "none", shading = "lambert";
+  bool depthOnly = false;
   std::string eye, target, up;
   double fov = 0, near = 0, far = 0, ortho = 0;
   CLI::Option *fovFlag = nullptr, *nearFlag = nullptr, *farFlag = nullptr, *orthoFlag = nullptr;
@@ -182,7 +184,11 @@ struct ViewFlags {
         ->type_name("N")
         ->check(CLI::Range(0, 4096))
         ->capture_default_str();
-    cmd.add_option("--raster", raster, "Triangle rasterizer")->check(oneOf(kRasterNames))->capture_default_str();
+    cmd.add_option("--raster", raster, "Triangle rasterizer (tiled: fast, bit-identical to halfspace)")
+        ->check(oneOf(kRasterNames))
+        ->capture_default_str();
+    cmd.add_flag("--depth-only", depthOnly,
+                 "z-buffer keeps only depth: no face ids or colour; depth is the stored value mapped back to eye depth");
     cmd.add_option("--cull", cull, "Face culling (faces are two-sided by default)")
         ->check(oneOf(kCullNames))
         ->capture_default_str();
@@ -214,6 +220,7 @@ struct ViewFlags {
     ImageSize imageSize = parseSize(size);
     job.options = options;
     job.options.raster = valueOf(kRasterNames, raster);
+    if (depthOnly) job.options.outputs = hsr::FrameOutputs::DepthOnly;
     job.options.cull = valueOf(kCullNames, cull);
     job.options.shading = valueOf(kShadingNames, shading);
     if (!depthFormat.empty()) job.options.depthFormat = hsr::DepthFormat::parse(depthFormat);

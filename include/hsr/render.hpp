@@ -22,12 +22,20 @@ namespace hsr {
 
 enum class Cull : uint8_t { None, Back, Front };
 enum class Shading : uint8_t { Flat, Lambert, FaceId };
-enum class RasterKind : uint8_t { HalfSpace, Scanline };
+/// The z-buffer's rasterizer. Tiled (default): binned, tiled, SIMD, multithreaded, bit-identical
+/// to HalfSpace (the scalar reference and its test oracle). Scanline: document 003's.
+enum class RasterKind : uint8_t { Tiled, HalfSpace, Scanline };
+/// What the z-buffer resolves into the Frame. All: face and triangle ids, eye depth, colour.
+/// IdsAndDepth: no colour (it stays the background; color_writes 0). DepthOnly: only the depth
+/// buffer is kept — ids stay -1, colour the background, and depth is the eye depth recovered
+/// from the stored value by inverting the depth mapping (so it carries the format's rounding).
+enum class FrameOutputs : uint8_t { All, IdsAndDepth, DepthOnly };
 
 struct RenderOptions {
   std::string algorithm = "zbuffer";
   DepthFormat depthFormat;               // default f32:reversed
-  RasterKind raster = RasterKind::HalfSpace;
+  RasterKind raster = RasterKind::Tiled;
+  FrameOutputs outputs = FrameOutputs::All;
   Cull cull = Cull::None;
   Shading shading = Shading::Lambert;
   Rgba8 background{0, 0, 0, 255};

@@ -37,8 +37,8 @@ Rgba8 TriangleShader::operator()(uint32_t t) const {
     for (uint32_t v : polygon) centroid += scene_.positions[v] - a;
     view = (a - eye_) + centroid / double(polygon.size());
   }
-  double ln = glm::length(n) * glm::length(view);
-  double cosine = ln > 0 ? std::abs(glm::dot(n, view)) / ln : 1.0;
+  const double ln2 = glm::dot(n, n) * glm::dot(view, view);
+  const double cosine = ln2 > 0 ? std::abs(glm::dot(n, view)) / std::sqrt(ln2) : 1.0;
   double k = 0.25 + 0.75 * cosine;
   auto scale = [k](uint8_t v) { return uint8_t(v * k + 0.5); };
   return Rgba8{scale(base.r), scale(base.g), scale(base.b), base.a};

@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "core/parallel.hpp"
 #include "core/shading.hpp"
 
 namespace hsr {
@@ -71,44 +72,55 @@ int64_t floorDiv(int64_t a, int64_t b) {  // b > 0
 
 }  // namespace
 
-bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, Rgba8 color, const Camera& cam,
-                   Cull cull, FrontEndOutput& out, SetupTriangle& t) {
-  double sx[3], sy[3];
-  int64_t X[3], Y[3];
-  for (int i = 0; i < 3; ++i) {
-    sx[i] = v[i].hx / v[i].w;
-    sy[i] = v[i].hy / v[i].w;
-    // Round to the nearest 1/256 pixel (|coordinate| < 2^15 pixels after clipping).
-    X[i] = int64_t(std::floor(sx[i] * kSubpixelOne + 0.5));
-    Y[i] = int64_t(std::floor(sy[i] * kSubpixelOne + 0.5));
-  }
+ProjectedVertex projectVertex(const HVertex& v) {
+  ProjectedVertex p;
+  p.sx = v.hx / v.w;
+  p.sy = v.hy / v.w;
+  // Round to the nearest 1/256 pixel (|coordinate| < 2^15 pixels after clipping).
+  p.X = int64_t(std::floor(p.sx * kSubpixelOne + 0.5));
+  p.Y = int64_t(std::floor(p.sy * kSubpixelOne + 0.5));
+  p.num = v.d / v.w;  // d/w and 1/w are affine in screen space
+  p.den = 1.0 / v.w;
+  return p;
+}
+
+bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, Rgba8 color, const Camera& cam, Cull cull,
+                   FrontEndCounters& counters, SetupTriangle& t) {
+  const ProjectedVertex p[3] = {projectVertex(v[0]), projectVertex(v[1]), projectVertex(v[2])};
+  return setupTriangle(p, triIndex, face, color, cam, cull, counters, t);
+}
+
+bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, Rgba8 color, const Camera& cam,
+                   Cull cull, FrontEndCounters& counters, SetupTriangle& t) {
   // Twice the signed area on the snapped grid, y down: negative = counter-clockwise as seen.
-  int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
+  const int64_t area = (v[1].X - v[0].X) * (v[2].Y - v[0].Y) - (v[1].Y - v[0].Y) * (v[2].X - v[0].X);
   if (area == 0) {
-    ++out.degenerate;
+    ++counters.degenerate;
     return false;
   }
   t.frontFacing = area < 0;
   if ((cull == Cull::Back && !t.frontFacing) || (cull == Cull::Front && t.frontFacing)) {
-    ++out.culledBackface;
+    ++counters.culledBackface;
     return false;
   }
   int order[3] = {0, 1, 2};
   if (area < 0) std::swap(order[1], order[2]);  // make the edge functions positive inside
-  double px[3], py[3], num[3], den[3];
+  double px[3], py[3], ux[3], uy[3], num[3], den[3];
   for (int i = 0; i < 3; ++i) {
-    int k = order[i];
-    t.x[i] = int32_t(X[k]);
-    t.y[i] = int32_t(Y[k]);
-    px[i] = double(X[k]) / kSubpixelOne;
-    py[i] = double(Y[k]) / kSubpixelOne;
-    num[i] = v[k].d / v[k].w;  // d/w and 1/w are affine in screen space
-    den[i] = 1.0 / v[k].w;
+    const ProjectedVertex& q = v[order[i]];
+    t.x[i] = int32_t(q.X);
+    t.y[i] = int32_t(q.Y);
+    px[i] = double(q.X) / kSubpixelOne;
+    py[i] = double(q.Y) / kSubpixelOne;
+    ux[i] = q.sx;
+    uy[i] = q.sy;
+    num[i] = q.num;
+    den[i] = q.den;
   }
   // Pixels whose centres (x + 1/2) can lie in the box: x in [ceil(min - 1/2), floor(max - 1/2)].
   const int64_t half = kSubpixelOne / 2;
-  int64_t minX = std::min({X[0], X[1], X[2]}), maxX = std::max({X[0], X[1], X[2]});
-  int64_t minY = std::min({Y[0], Y[1], Y[2]}), maxY = std::max({Y[0], Y[1], Y[2]});
+  const int64_t minX = std::min({v[0].X, v[1].X, v[2].X}), maxX = std::max({v[0].X, v[1].X, v[2].X});
+  const int64_t minY = std::min({v[0].Y, v[1].Y, v[2].Y}), maxY = std::max({v[0].Y, v[1].Y, v[2].Y});
   t.minX = int(std::max<int64_t>(0, -floorDiv(-(minX - half), kSubpixelOne)));
   t.maxX = int(std::min<int64_t>(cam.width - 1, floorDiv(maxX - half, kSubpixelOne)));
   t.minY = int(std::max<int64_t>(0, -floorDiv(-(minY - half), kSubpixelOne)));
@@ -116,17 +128,12 @@ bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, Rgba8 col
   if (t.minX > t.maxX || t.minY > t.maxY) {
     // Off screen (inside the guard band) or too small to contain a pixel centre.
     if (maxX < 0 || maxY < 0 || minX > int64_t(cam.width) * kSubpixelOne || minY > int64_t(cam.height) * kSubpixelOne)
-      ++out.culledFrustum;
+      ++counters.culledFrustum;
     return false;
   }
   // Depth planes through the unsnapped positions: snapping decides coverage only, so depth stays
   // exact for the true triangle. Fall back to the snapped positions when the unsnapped triangle is
   // (nearly) degenerate and its plane would be ill-conditioned.
-  double ux[3], uy[3];
-  for (int i = 0; i < 3; ++i) {
-    ux[i] = sx[order[i]];
-    uy[i] = sy[order[i]];
-  }
   const double exactArea = (ux[1] - ux[0]) * (uy[2] - uy[0]) - (uy[1] - uy[0]) * (ux[2] - ux[0]);
   const bool useExact = exactArea > 0.5 * double(std::abs(area)) / double(kSubpixelOne * kSubpixelOne);
   t.depthNum = useExact ? planeThrough(ux, uy, num) : planeThrough(px, py, num);
@@ -137,15 +144,65 @@ bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, Rgba8 col
   return true;
 }
 
-uint64_t FrontEndOutput::memoryBytes() const { return triangles.capacity() * sizeof(SetupTriangle); }
+uint64_t FrontEndOutput::memoryBytes() const {
+  uint64_t bytes = triangles.capacity() * sizeof(SetupTriangle) + hv.capacity() * sizeof(HVertex) +
+                   outcodes.capacity() + projected.capacity() * sizeof(ProjectedVertex) + faceVisible.capacity();
+  for (const auto& c : chunks) bytes += c.capacity() * sizeof(SetupTriangle);
+  return bytes;
+}
+
+namespace {
+
+// Triangles per chunk of front-end work: fixed, so results never depend on the thread count.
+constexpr size_t kChunkTriangles = 1 << 14;
+
+// Sets up the triangles [begin, end) into `out` in order, clipping where needed.
+void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& options, const TriangleShader& shade,
+                const FrontEndOutput& fe, size_t begin, size_t end, std::vector<SetupTriangle>& out,
+                FrontEndCounters& counters) {
+  out.clear();
+  HVertex poly[3 + kPlanes], scratch[3 + kPlanes];
+  SetupTriangle st;
+  for (size_t ti = begin; ti < end; ++ti) {
+    const Triangle& tri = scene.triangles[ti];
+    if (!fe.faceVisible[tri.face]) {
+      ++counters.culledFrustum;
+      continue;
+    }
+    const uint32_t c0 = fe.outcodes[tri.v[0]], c1 = fe.outcodes[tri.v[1]], c2 = fe.outcodes[tri.v[2]];
+    if (c0 & c1 & c2) {
+      ++counters.culledFrustum;
+      continue;
+    }
+    // Colour only when the frame keeps it (shading reads the face's vertices again).
+    const Rgba8 color = options.outputs == FrameOutputs::All ? shade(uint32_t(ti)) : options.background;
+    if ((c0 | c1 | c2) == 0) {
+      const ProjectedVertex p[3] = {fe.projected[tri.v[0]], fe.projected[tri.v[1]], fe.projected[tri.v[2]]};
+      if (setupTriangle(p, uint32_t(ti), tri.face, color, cam, options.cull, counters, st)) out.push_back(st);
+      continue;
+    }
+    ++counters.clipped;
+    poly[0] = fe.hv[tri.v[0]];
+    poly[1] = fe.hv[tri.v[1]];
+    poly[2] = fe.hv[tri.v[2]];
+    const int n = clipPolygon(poly, 3, c0 | c1 | c2, cam, scratch);
+    // The clipped polygon is convex: fan it. Every piece keeps the triangle's and face's index.
+    for (int i = 1; i + 1 < n; ++i) {
+      HVertex piece[3] = {poly[0], poly[i], poly[i + 1]};
+      if (setupTriangle(piece, uint32_t(ti), tri.face, color, cam, options.cull, counters, st)) out.push_back(st);
+    }
+  }
+}
+
+}  // namespace
 
 void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& options, FrontEndOutput& out) {
-  out.triangles.clear();
-  out.clipped = out.culledBackface = out.culledFrustum = out.degenerate = 0;
+  static_cast<FrontEndCounters&>(out) = FrontEndCounters{};
+  const int threads = resolveThreads(options.threads);
 
   // Object-level view culling: a mesh whose bounding box lies wholly outside one clipping plane
   // is skipped without touching its triangles.
-  std::vector<uint8_t> faceVisible(scene.faceCount(), 1);
+  out.faceVisible.assign(scene.faceCount(), 1);
   for (const MeshRange& mesh : scene.meshes) {
     Bounds3 b;
     for (uint32_t f = mesh.firstFace; f < mesh.firstFace + mesh.faceCount; ++f)
@@ -157,49 +214,46 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
       dvec4 h = cam.toPixelH(p);
       all &= outcode({h.x, h.y, h.z, h.w}, cam);
     }
-    if (all) std::fill(faceVisible.begin() + mesh.firstFace, faceVisible.begin() + mesh.firstFace + mesh.faceCount, 0);
+    if (all)
+      std::fill(out.faceVisible.begin() + mesh.firstFace, out.faceVisible.begin() + mesh.firstFace + mesh.faceCount, 0);
   }
 
-  // Transform every vertex once, in double, straight from world to homogeneous pixel coordinates.
-  std::vector<HVertex> hv(scene.positions.size());
+  // Every vertex once, in double, straight from world to homogeneous pixel coordinates; those
+  // inside the clip volume are projected and snapped here, shared by all their triangles.
+  const size_t nv = scene.positions.size();
+  out.hv.resize(nv);
+  out.outcodes.resize(nv);
+  out.projected.resize(nv);
   const dmat4 pixelFromWorld = cam.pixelFromCamera * cam.cameraFromWorld;
-  for (size_t i = 0; i < hv.size(); ++i) {
-    dvec4 h = pixelFromWorld * dvec4(scene.positions[i], 1.0);
-    hv[i] = {h.x, h.y, h.z, h.w};
-  }
+  const size_t vertexChunks = (nv + kChunkTriangles - 1) / kChunkTriangles;
+  parallelFor(0, vertexChunks, threads, [&](size_t c) {
+    for (size_t i = c * kChunkTriangles, e = std::min(nv, i + kChunkTriangles); i < e; ++i) {
+      const dvec4 h = pixelFromWorld * dvec4(scene.positions[i], 1.0);
+      out.hv[i] = {h.x, h.y, h.z, h.w};
+      out.outcodes[i] = uint8_t(outcode(out.hv[i], cam));
+      if (!out.outcodes[i]) out.projected[i] = projectVertex(out.hv[i]);
+    }
+  });
 
+  // Triangles in fixed chunks, each into its own list, then concatenated in order.
   const TriangleShader shade(scene, cam, options.shading);
-  out.triangles.reserve(scene.triangles.size());
-  HVertex poly[3 + kPlanes], scratch[3 + kPlanes];
-  SetupTriangle st;
-  for (uint32_t ti = 0; ti < scene.triangles.size(); ++ti) {
-    const Triangle& tri = scene.triangles[ti];
-    if (!faceVisible[tri.face]) {
-      ++out.culledFrustum;
-      continue;
-    }
-    HVertex v[3] = {hv[tri.v[0]], hv[tri.v[1]], hv[tri.v[2]]};
-    uint32_t c0 = outcode(v[0], cam), c1 = outcode(v[1], cam), c2 = outcode(v[2], cam);
-    if (c0 & c1 & c2) {
-      ++out.culledFrustum;
-      continue;
-    }
-    Rgba8 color = shade(ti);
-    if ((c0 | c1 | c2) == 0) {
-      if (setupTriangle(v, ti, tri.face, color, cam, options.cull, out, st)) out.triangles.push_back(st);
-      continue;
-    }
-    ++out.clipped;
-    poly[0] = v[0];
-    poly[1] = v[1];
-    poly[2] = v[2];
-    int n = clipPolygon(poly, 3, c0 | c1 | c2, cam, scratch);
-    // The clipped polygon is convex: fan it. Every piece keeps the triangle's and face's index.
-    for (int i = 1; i + 1 < n; ++i) {
-      HVertex piece[3] = {poly[0], poly[i], poly[i + 1]};
-      if (setupTriangle(piece, ti, tri.face, color, cam, options.cull, out, st)) out.triangles.push_back(st);
-    }
+  const size_t nt = scene.triangles.size();
+  const size_t chunks = (nt + kChunkTriangles - 1) / kChunkTriangles;
+  if (out.chunks.size() < chunks) out.chunks.resize(chunks);
+  out.chunkCounters.assign(chunks, FrontEndCounters{});
+  parallelFor(0, chunks, threads, [&](size_t c) {
+    setupRange(scene, cam, options, shade, out, c * kChunkTriangles, std::min(nt, (c + 1) * kChunkTriangles),
+               out.chunks[c], out.chunkCounters[c]);
+  });
+  std::vector<size_t> offset(chunks + 1, 0);
+  for (size_t c = 0; c < chunks; ++c) {
+    offset[c + 1] = offset[c] + out.chunks[c].size();
+    out.add(out.chunkCounters[c]);
   }
+  out.triangles.resize(offset[chunks]);
+  parallelFor(0, chunks, threads, [&](size_t c) {
+    std::copy(out.chunks[c].begin(), out.chunks[c].end(), out.triangles.begin() + std::ptrdiff_t(offset[c]));
+  });
 }
 
 }  // namespace hsr

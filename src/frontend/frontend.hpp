@@ -38,23 +38,56 @@ struct SetupTriangle {
   double eyeDepth(double px, double py) const { return depthNum.at(px, py) / depthDen.at(px, py); }
 };
 
-struct FrontEndOutput {
-  std::vector<SetupTriangle> triangles;
-  uint64_t clipped = 0, culledBackface = 0, culledFrustum = 0, degenerate = 0;
-  uint64_t memoryBytes() const;
-};
-
 /// Homogeneous pixel coordinates of a vertex: pixel = (hx / w, hy / w), eye depth d (w > 0).
 struct HVertex {
   double hx, hy, d, w;
 };
 
-/// Sets up one clipped triangle (all vertices inside the clip volume): projects, snaps, culls
-/// and fills `t`. Returns false, counting the reason in `out`, when it draws nothing.
-bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, Rgba8 color, const Camera& cam,
-                   Cull cull, FrontEndOutput& out, SetupTriangle& t);
+/// A vertex inside the clip volume, projected once and shared by all its triangles.
+struct ProjectedVertex {
+  double sx, sy;   // pixel position (unsnapped)
+  int64_t X, Y;    // snapped to 1/256 pixel
+  double num, den; // d/w and 1/w, both affine in screen space
+};
 
-/// Runs the front end over all scene triangles, in order. `out` is reused across frames.
+/// Why triangles were not drawn, counted per scene triangle or clipped piece.
+struct FrontEndCounters {
+  uint64_t clipped = 0, culledBackface = 0, culledFrustum = 0, degenerate = 0;
+  void add(const FrontEndCounters& o) {
+    clipped += o.clipped;
+    culledBackface += o.culledBackface;
+    culledFrustum += o.culledFrustum;
+    degenerate += o.degenerate;
+  }
+};
+
+struct FrontEndOutput : FrontEndCounters {
+  std::vector<SetupTriangle> triangles;  // in submission order
+  uint64_t memoryBytes() const;
+
+  // Scratch reused from frame to frame (no allocation once warm).
+  std::vector<HVertex> hv;
+  std::vector<uint8_t> outcodes;
+  std::vector<ProjectedVertex> projected;
+  std::vector<uint8_t> faceVisible;
+  std::vector<std::vector<SetupTriangle>> chunks;
+  std::vector<FrontEndCounters> chunkCounters;
+};
+
+/// Projects and snaps a vertex that lies inside the clip volume.
+ProjectedVertex projectVertex(const HVertex& v);
+
+/// Sets up one triangle whose vertices are inside the clip volume: culls and fills `t`.
+/// Returns false, counting the reason in `counters`, when it draws nothing.
+bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, Rgba8 color, const Camera& cam,
+                   Cull cull, FrontEndCounters& counters, SetupTriangle& t);
+/// The same from homogeneous coordinates (projects first).
+bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, Rgba8 color, const Camera& cam,
+                   Cull cull, FrontEndCounters& counters, SetupTriangle& t);
+
+/// Runs the front end over all scene triangles, in order, on up to options.threads threads; the
+/// work is split into fixed chunks, so the output never depends on the thread count.
+/// `out` is reused across frames.
 void runFrontEnd(const Scene& scene, const Camera& camera, const RenderOptions& options, FrontEndOutput& out);
 
 }  // namespace hsr

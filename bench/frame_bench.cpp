@@ -1,0 +1,139 @@
+// Micro benchmarks of the parts of a z-buffer frame at 1920x1080: the front end (set-up), the
+// binning, the tile pass per depth format, and whole frames tiled vs the scalar reference.
+// Google Benchmark; the context records the kernel's instruction set, tile size and threads.
+// Run: build/bench/hsr_bench --benchmark_filter=Frame  (whole frames also via `hsr bench`).
+#include <benchmark/benchmark.h>
+
+#include <hsr/hsr.hpp>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "core/parallel.hpp"
+#include "frontend/frontend.hpp"
+#include "raster/tiled.hpp"
+
+namespace hsr {
+namespace {
+
+constexpr int kWidth = 1920, kHeight = 1080;
+
+struct Prepared {
+  Scene scene;
+  Camera camera;
+  FrontEndOutput fe;
+};
+
+// Scenes are generated, framed and set up once per process.
+const Prepared& prepared(const std::string& name) {
+  static std::map<std::string, Prepared> cache;
+  auto it = cache.find(name);
+  if (it != cache.end()) return it->second;
+  Prepared& p = cache[name];
+  p.scene = loadScene("builtin:" + name);
+  p.camera = resolveCamera(p.scene.camera ? *p.scene.camera : frameBounds(p.scene.bounds()), kWidth, kHeight,
+                           p.scene.bounds());
+  runFrontEnd(p.scene, p.camera, RenderOptions{}, p.fe);
+  return p;
+}
+
+const char* kScenes[] = {"sphere", "city", "random?n=10000", "layers?n=64", "cubes"};
+const char* kFormats[] = {"u16:z", "u16:reversed", "u16:inv", "u16:linear", "u24:z", "u24:reversed",
+                          "u24:inv", "u24:linear", "u32:z", "u32:reversed", "u32:inv", "u32:linear",
+                          "f32:z", "f32:reversed", "f32:inv", "f32:linear"};
+
+void BM_FrontEnd(benchmark::State& state) {
+  const Prepared& p = prepared(kScenes[state.range(0)]);
+  FrontEndOutput fe;
+  for (auto _ : state) {
+    runFrontEnd(p.scene, p.camera, RenderOptions{}, fe);
+    benchmark::DoNotOptimize(fe.triangles.data());
+  }
+  state.SetLabel(kScenes[state.range(0)]);
+  state.counters["triangles"] = double(fe.triangles.size());
+}
+BENCHMARK(BM_FrontEnd)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+void BM_Bin(benchmark::State& state) {
+  const Prepared& p = prepared(kScenes[state.range(0)]);
+  const tiled::DepthSetup depth{DepthFormat{}, p.camera.near, p.camera.far, p.camera.orthographic};
+  tiled::Bins bins;
+  for (auto _ : state) {
+    tiled::prepareBins(bins, kWidth, kHeight, p.fe.triangles.size(), 1);
+    tiled::binRange(bins, p.fe.triangles, depth, 0);
+    benchmark::DoNotOptimize(bins.lists.data());
+  }
+  size_t entries = 0;
+  for (int t = 0; t < bins.tileCount(); ++t) entries += bins.entries(t);
+  state.SetLabel(kScenes[state.range(0)]);
+  state.counters["entries"] = double(entries);
+}
+BENCHMARK(BM_Bin)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// The tile pass alone (no resolve), one thread, for scene range(0) and format range(1).
+void BM_RasterTiles(benchmark::State& state) {
+  const Prepared& p = prepared(kScenes[state.range(0)]);
+  const tiled::DepthSetup depth{DepthFormat::parse(kFormats[state.range(1)]), p.camera.near, p.camera.far,
+                                p.camera.orthographic};
+  tiled::Bins bins;
+  tiled::prepareBins(bins, kWidth, kHeight, p.fe.triangles.size(), 1);
+  tiled::binRange(bins, p.fe.triangles, depth, 0);
+  auto scratch = std::make_unique<tiled::TileScratch>();
+  tiled::RasterCounters counters;
+  for (auto _ : state) {
+    counters = {};
+    for (int tile = 0; tile < bins.tileCount(); ++tile)
+      if (bins.entries(tile)) tiled::rasterizeTile(bins, tile, p.fe.triangles, depth, true, *scratch, counters);
+  }
+  state.SetLabel(std::string(kScenes[state.range(0)]) + " " + kFormats[state.range(1)]);
+  state.counters["tests"] = double(counters.depthTests);
+  state.counters["writes"] = double(counters.depthWrites);
+  state.counters["culled_tiles"] = double(counters.culledTiles);
+  state.counters["blocks_full"] = double(counters.blocksFull);
+  state.counters["blocks_partial"] = double(counters.blocksPartial);
+  state.counters["blocks_culled"] = double(counters.blocksCulled);
+  state.counters["rows_culled"] = double(counters.rowsCulled);
+}
+BENCHMARK(BM_RasterTiles)
+    ->ArgsProduct({{0, 1, 3}, benchmark::CreateDenseRange(0, 15, 1)})
+    ->Unit(benchmark::kMillisecond);
+
+// Whole frames through render(): scene range(0), raster range(1) (0 tiled, 1 halfspace),
+// threads range(2), depth only range(3).
+void BM_Frame(benchmark::State& state) {
+  const Prepared& p = prepared(kScenes[state.range(0)]);
+  RenderOptions options;
+  options.raster = state.range(1) == 0 ? RasterKind::Tiled : RasterKind::HalfSpace;
+  options.threads = int(state.range(2));
+  if (state.range(3)) options.outputs = FrameOutputs::DepthOnly;
+  for (auto _ : state) {
+    Frame frame = render(p.scene, p.camera, options);
+    benchmark::DoNotOptimize(frame.depth.data());
+  }
+  state.SetLabel(std::string(kScenes[state.range(0)]) + (state.range(1) ? " halfspace" : " tiled") +
+                 (state.range(3) ? " depth-only" : ""));
+}
+BENCHMARK(BM_Frame)
+    ->ArgsProduct({{0, 1, 2, 3, 4}, {0}, {1, 2}, {0, 1}})
+    ->ArgsProduct({{1, 2, 4}, {1}, {1}, {0}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+}  // namespace
+}  // namespace hsr
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  benchmark::AddCustomContext("kernel_isa", hsr::tiled::kernelTarget());
+  benchmark::AddCustomContext("tile_size", std::to_string(hsr::tiled::kTileSize));
+  benchmark::AddCustomContext("hardware_threads", std::to_string(hsr::resolveThreads(0)));
+  benchmark::AddCustomContext("size", std::to_string(hsr::kWidth) + "x" + std::to_string(hsr::kHeight));
+#ifdef NDEBUG
+  benchmark::AddCustomContext("assertions", "off");
+#else
+  benchmark::AddCustomContext("assertions", "on");
+#endif
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
