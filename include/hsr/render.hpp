@@ -46,6 +46,9 @@ struct RenderOptions {
 /// Renders `scene` (finalized) seen by `camera` with options.algorithm.
 /// Throws InputError for an unknown algorithm or bad options.
 Frame render(const Scene& scene, const Camera& camera, const RenderOptions& options);
+/// The same into `frame`, reusing its buffers: for rendering many frames (or views) without
+/// allocating a new visibility buffer each time.
+void render(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
 
 /// A visibility algorithm: fills frame.faceId/triangleId/depth/color and frame.stats.
 using AlgorithmFn = std::function<void(const Scene&, const Camera&, const RenderOptions&, Frame&)>;

@@ -24,6 +24,12 @@ const AlgorithmInfo* findAlgorithm(const std::string& name) {
 }
 
 Frame render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
+  Frame frame;
+  render(scene, camera, options, frame);
+  return frame;
+}
+
+void render(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame) {
   const AlgorithmInfo* algorithm = findAlgorithm(options.algorithm);
   if (!algorithm) {
     std::string names;
@@ -36,7 +42,7 @@ Frame render(const Scene& scene, const Camera& camera, const RenderOptions& opti
     throw InputError("--depth-format: the inv mapping needs near > 0");
 
   Timer total;
-  Frame frame;
+  frame.stats = Stats{};
   frame.resize(camera.width, camera.height, options.background);
   frame.stats.width = camera.width;
   frame.stats.height = camera.height;
@@ -57,7 +63,6 @@ Frame render(const Scene& scene, const Camera& camera, const RenderOptions& opti
     frame.stats.addTime("verify_reference", reference.stats.time_ms.back().second);
     frame.stats.addTime("verify_compare", verifyTimer.ms());
   }
-  return frame;
 }
 
 }  // namespace hsr
