@@ -15,19 +15,7 @@ build="${BUILD_DIR:-build}"
 
 # Set-up: hsr's own packages, then the GL side — headers and libOpenGL/libEGL (GLVND) to build,
 # Mesa's EGL vendor library and its DRI drivers (llvmpipe) to run.
-scripts/install-deps.sh
-gl_packages=(libopengl-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri)
-missing=()
-for p in "${gl_packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "bench-peer: installing ${missing[*]}"
-  SUDO=""
-  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
-  $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
-fi
+scripts/install-deps.sh libopengl-dev libegl-dev libgl-dev libegl-mesa0 libgl1-mesa-dri
 
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 peer="$build/bench/peer/hsr_peer_llvmpipe"

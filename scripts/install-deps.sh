@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# Installs the Debian packages hsr needs to build and test, skipping those already present.
-# Idempotent; run as root (or with sudo available). Used by the README's two commands and CI.
+# Installs the Debian packages hsr needs to build and test, plus any packages named as arguments,
+# skipping those already present. Idempotent; run as root (or with sudo available). Used by the
+# README's two commands, CI and scripts/bench-peer.sh.
 set -euo pipefail
 packages=(build-essential cmake ninja-build pkg-config
   libglm-dev nlohmann-json3-dev libfmt-dev libcli11-dev libassimp-dev libopenexr-dev
-  libpng-dev libstb-dev libgtest-dev libbenchmark-dev libhwy-dev)
+  libpng-dev libstb-dev libgtest-dev libbenchmark-dev libhwy-dev "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
