@@ -46,7 +46,9 @@ struct Frame {
   std::vector<Rgba8> color;         // shaded colour, background colour where empty
   Stats stats;
 
-  void resize(int w, int h, Rgba8 background);
+  /// Sizes the buffers (reusing their memory) and clears them to background / -1 / +inf,
+  /// splitting the clear over up to `threads` threads.
+  void resize(int w, int h, Rgba8 background, int threads = 1);
   size_t index(int x, int y) const { return size_t(y) * size_t(width) + size_t(x); }
 };
 

@@ -12,7 +12,7 @@ namespace hsr::algo {
 
 void raycast(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame) {
   Timer timer;
-  frame.resize(camera.width, camera.height, options.background);
+  frame.resize(camera.width, camera.height, options.background, resolveThreads(options.threads));
   const CameraSpaceBvh bvh(scene, camera);
   Stats& st = frame.stats;
   st.addTime("build", timer.lap());

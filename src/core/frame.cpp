@@ -2,8 +2,11 @@
 // CLI (--stats, --json, bench) and the tests.
 #include <hsr/frame.hpp>
 
+#include <algorithm>
 #include <limits>
 #include <nlohmann/json.hpp>
+
+#include "core/parallel.hpp"
 
 namespace hsr {
 
@@ -43,14 +46,23 @@ std::string Stats::toJson(int indent) const {
   return j.dump(indent);
 }
 
-void Frame::resize(int w, int h, Rgba8 background) {
+void Frame::resize(int w, int h, Rgba8 background, int threads) {
   width = w;
   height = h;
-  size_t n = size_t(w) * size_t(h);
-  faceId.assign(n, -1);
-  triangleId.assign(n, -1);
-  depth.assign(n, std::numeric_limits<float>::infinity());
-  color.assign(n, background);
+  const size_t n = size_t(w) * size_t(h);
+  faceId.resize(n);
+  triangleId.resize(n);
+  depth.resize(n);
+  color.resize(n);
+  // The clear is a pass over 16 bytes a pixel: worth splitting for large frames.
+  const size_t chunk = 1 << 16;
+  parallelFor(0, (n + chunk - 1) / chunk, threads, [&](size_t c) {
+    const size_t b = c * chunk, e = std::min(n, b + chunk);
+    std::fill(faceId.begin() + std::ptrdiff_t(b), faceId.begin() + std::ptrdiff_t(e), -1);
+    std::fill(triangleId.begin() + std::ptrdiff_t(b), triangleId.begin() + std::ptrdiff_t(e), -1);
+    std::fill(depth.begin() + std::ptrdiff_t(b), depth.begin() + std::ptrdiff_t(e), std::numeric_limits<float>::infinity());
+    std::fill(color.begin() + std::ptrdiff_t(b), color.begin() + std::ptrdiff_t(e), background);
+  });
 }
 
 }  // namespace hsr

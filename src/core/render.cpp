@@ -3,6 +3,7 @@
 #include <hsr/render.hpp>
 
 #include "algorithms/algorithms.hpp"
+#include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "frontend/frontend.hpp"
 
@@ -43,7 +44,7 @@ void render(const Scene& scene, const Camera& camera, const RenderOptions& optio
 
   Timer total;
   frame.stats = Stats{};
-  frame.resize(camera.width, camera.height, options.background);
+  frame.resize(camera.width, camera.height, options.background, resolveThreads(options.threads));
   frame.stats.width = camera.width;
   frame.stats.height = camera.height;
   frame.stats.faces = scene.faceCount();
