@@ -1,12 +1,11 @@
-// A tiny deterministic parallel-for over an index range, used by callers (never inside algorithm
-// inner loops). Work is split into fixed chunks, so results never depend on the thread count as
-// long as each index writes only its own outputs.
+// Deterministic parallel-for over an index range on a persistent thread pool, used by callers
+// (the front end, the tiled z-buffer's tile loop, the ray caster's rows, buffer clears), never
+// inside an algorithm's inner loop. Work items are fixed by the caller, so results never depend
+// on the thread count as long as each index writes only its own outputs.
 #pragma once
-#include <algorithm>
-#include <atomic>
 #include <cstddef>
+#include <functional>
 #include <thread>
-#include <vector>
 
 namespace hsr {
 
@@ -16,23 +15,20 @@ inline int resolveThreads(int requested) {
   return n ? int(n) : 1;
 }
 
+/// Runs task(i) for i in [0, n) on the calling thread plus up to threads - 1 pool workers
+/// (the pool has hardware_concurrency - 1 of them, started once). A call made while another
+/// is running (nested, or from another thread) runs serially on its caller.
+void runParallel(size_t n, int threads, const std::function<void(size_t)>& task);
+
 /// Calls fn(i) for i in [begin, end) on up to `threads` threads.
 template <class Fn>
 void parallelFor(size_t begin, size_t end, int threads, Fn&& fn) {
-  threads = std::max(1, threads);
-  size_t n = end > begin ? end - begin : 0;
-  if (threads == 1 || n < 2) {
+  if (end <= begin) return;
+  if (threads <= 1 || end - begin == 1) {
     for (size_t i = begin; i < end; ++i) fn(i);
     return;
   }
-  std::atomic<size_t> next{begin};
-  auto worker = [&] {
-    for (size_t i; (i = next.fetch_add(1)) < end;) fn(i);
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads && size_t(t) < n; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
+  runParallel(end - begin, threads, [&](size_t i) { fn(begin + i); });
 }
 
 }  // namespace hsr
