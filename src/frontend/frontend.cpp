@@ -66,10 +66,6 @@ Plane planeThrough(const double* x, const double* y, const double* v) {
   return p;
 }
 
-int64_t floorDiv(int64_t a, int64_t b) {  // b > 0
-  return a >= 0 ? a / b : -((-a + b - 1) / b);
-}
-
 }  // namespace
 
 ProjectedVertex projectVertex(const HVertex& v) {
@@ -121,9 +117,9 @@ bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, R
   const int64_t half = kSubpixelOne / 2;
   const int64_t minX = std::min({v[0].X, v[1].X, v[2].X}), maxX = std::max({v[0].X, v[1].X, v[2].X});
   const int64_t minY = std::min({v[0].Y, v[1].Y, v[2].Y}), maxY = std::max({v[0].Y, v[1].Y, v[2].Y});
-  t.minX = int(std::max<int64_t>(0, -floorDiv(-(minX - half), kSubpixelOne)));
+  t.minX = int(std::max<int64_t>(0, ceilDiv(minX - half, kSubpixelOne)));
   t.maxX = int(std::min<int64_t>(cam.width - 1, floorDiv(maxX - half, kSubpixelOne)));
-  t.minY = int(std::max<int64_t>(0, -floorDiv(-(minY - half), kSubpixelOne)));
+  t.minY = int(std::max<int64_t>(0, ceilDiv(minY - half, kSubpixelOne)));
   t.maxY = int(std::min<int64_t>(cam.height - 1, floorDiv(maxY - half, kSubpixelOne)));
   if (t.minX > t.maxX || t.minY > t.maxY) {
     // Off screen (inside the guard band) or too small to contain a pixel centre.

@@ -2,7 +2,8 @@
 // coordinates (double, relative to the camera), clipping (near, far, guard band), perspective
 // divide, snapping to 1/256 pixel, culling and triangle setup (integer edge functions with the
 // top-left rule, depth planes). Produces SetupTriangles in submission order; consumed by the
-// rasterizers (raster/) through the algorithms. Runs on the calling thread.
+// rasterizers (raster/) through the algorithms. Called from one thread; spreads its fixed chunks
+// of vertices and triangles over the thread pool (core/parallel.hpp).
 #pragma once
 #include <hsr/render.hpp>
 
@@ -17,6 +18,10 @@ inline constexpr int64_t kSubpixelOne = int64_t(1) << kSubpixelBits;
 /// snapped coordinates by 2^15 pixels (2^23 fixed point) so edge functions fit int64 with room.
 inline constexpr double kGuardBandPixels = 8192;
 inline constexpr int kMaxImageSize = 16384;
+
+/// Integer division rounding towards minus / plus infinity (b > 0), for pixel ranges.
+inline int64_t floorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+inline int64_t ceilDiv(int64_t a, int64_t b) { return -floorDiv(-a, b); }
 
 /// An affine function of pixel position: value(x, y) = a x + b y + c (x, y in pixels).
 struct Plane {

@@ -10,13 +10,6 @@
 
 namespace hsr {
 
-namespace detail {
-inline int64_t floorDiv(int64_t a, int64_t b) {  // b > 0
-  return a >= 0 ? a / b : -((-a + b - 1) / b);
-}
-inline int64_t ceilDiv(int64_t a, int64_t b) { return -floorDiv(-a, b); }  // b > 0
-}  // namespace detail
-
 template <class Visit>
 void rasterizeScanline(const SetupTriangle& t, Visit&& visit) {
   const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
@@ -33,9 +26,9 @@ void rasterizeScanline(const SetupTriangle& t, Visit&& visit) {
       if (edge.dy == 0) {
         if (K < 0) xr = xl - 1;  // the whole row is outside this horizontal edge
       } else if (edge.dy > 0) {  // px <= K / dy
-        xr = std::min(xr, detail::floorDiv(detail::floorDiv(K, edge.dy) - h, kSubpixelOne));
+        xr = std::min(xr, floorDiv(floorDiv(K, edge.dy) - h, kSubpixelOne));
       } else {  // px >= K / dy = (-K) / (-dy)
-        xl = std::max(xl, detail::ceilDiv(detail::ceilDiv(-K, -edge.dy) - h, kSubpixelOne));
+        xl = std::max(xl, ceilDiv(ceilDiv(-K, -edge.dy) - h, kSubpixelOne));
       }
     }
     if (xl > xr) continue;
