@@ -2,6 +2,8 @@
 // scratch directory and checks exit status, the one-line error on stderr, the files written and
 // the JSON printed (CONVENTIONS.md "Command line").
 #include <gtest/gtest.h>
+
+#include "temp_dir.hpp"
 #include <nlohmann/json.hpp>
 #include <stb/stb_image.h>
 
@@ -37,16 +39,8 @@ std::ostream& operator<<(std::ostream& os, const Result& r) {
   return os << "status " << r.status << "\nstdout: " << r.out << "\nstderr: " << r.err;
 }
 
-class CommandLine : public ::testing::Test {
+class CommandLine : public hsr::test::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("hsr_cli_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
 
   // Runs `hsr ARGS` in the scratch directory (ARGS is shell text: quote as needed).
   Result hsr(const std::string& args) const {
@@ -68,8 +62,6 @@ class CommandLine : public ::testing::Test {
     std::sort(names.begin(), names.end());
     return names;
   }
-
-  fs::path dir_;
 };
 
 // The header text and data of an NPY file.

@@ -6,6 +6,8 @@
 #include "io/encode.hpp"
 
 #include <gtest/gtest.h>
+
+#include "temp_dir.hpp"
 #include <stb/stb_image.h>
 
 #include <algorithm>
@@ -83,17 +85,8 @@ Png readPng(const fs::path& path) {
   return png;
 }
 
-class IoWriters : public ::testing::Test {
+class IoWriters : public hsr::test::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("hsr_io_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
   // Every file in the directory: a writer must leave exactly its target behind.
   std::vector<std::string> listing() const {
     std::vector<std::string> names;
@@ -101,7 +94,6 @@ class IoWriters : public ::testing::Test {
     std::sort(names.begin(), names.end());
     return names;
   }
-  fs::path dir_;
 };
 
 }  // namespace

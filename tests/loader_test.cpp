@@ -2,6 +2,8 @@
 // JSON): small files written to a temporary folder, loaded and checked for positions, face
 // order, colours and triangles; malformed variants must fail with "file[:line]: problem".
 #include <gtest/gtest.h>
+
+#include "temp_dir.hpp"
 #include <hsr/io.hpp>
 #include <unistd.h>
 
@@ -22,19 +24,8 @@ namespace fs = std::filesystem;
 constexpr Rgba8 kGrey{200, 200, 200, 255};
 
 /// A temporary folder per test, removed afterwards.
-class LoaderTest : public ::testing::Test {
+class LoaderTest : public test::TempDirTest {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("hsr_loader_test_" + std::to_string(getpid()) + "_" + info->test_suite_name() + "_" + info->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
 
   std::string write(const std::string& name, std::string_view bytes) {
     fs::path p = dir_ / name;
@@ -61,8 +52,6 @@ class LoaderTest : public ::testing::Test {
     SCOPED_TRACE(std::string(text.substr(0, 200)));
     expectError(write(name, text), parts);
   }
-
-  fs::path dir_;
 };
 
 /// Little helper to build binary files.

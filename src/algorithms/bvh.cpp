@@ -40,23 +40,12 @@ double widenDown(double t) { return t - std::abs(t) * kPad; }
 // rays that pass within rounding of an edge from "on both" to "on one" side.)
 double edgeFunction(double a, double b, double c, double d) { return a * b - c * d; }
 
-struct Box {
-  dvec3 lo{kInf}, hi{-kInf};
-  void add(const dvec3& p) {
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
-  }
-  void add(const Box& b) {
-    lo = glm::min(lo, b.lo);
-    hi = glm::max(hi, b.hi);
-  }
-  // Half the surface area; 0 for an empty box. (Only ratios matter to the SAH.)
-  double halfArea() const {
-    if (lo.x > hi.x) return 0;
-    dvec3 e = hi - lo;
-    return e.x * e.y + e.y * e.z + e.z * e.x;
-  }
-};
+// Half the surface area of a box; 0 for an empty one. (Only ratios matter to the SAH.)
+double halfArea(const Bounds3& b) {
+  if (b.empty()) return 0;
+  const dvec3 e = b.hi - b.lo;
+  return e.x * e.y + e.y * e.z + e.z * e.x;
+}
 
 }  // namespace
 
@@ -131,7 +120,7 @@ void CameraSpaceBvh::build(const std::vector<uint32_t>& candidates) {
   // The build works on references (bounds + triangle index) that it reorders in place, so every
   // pass over a node's triangles reads memory in order.
   struct Ref {
-    Box box;
+    Bounds3 box;
     uint32_t tri;
     dvec3 centre() const { return box.lo * 0.5 + box.hi * 0.5; }  // cannot overflow
   };
@@ -142,7 +131,7 @@ void CameraSpaceBvh::build(const std::vector<uint32_t>& candidates) {
   }
   // Bounds of the triangles and of their centres over refs[begin, end).
   struct Extent {
-    Box bounds, centres;
+    Bounds3 bounds, centres;
     void add(const Ref& r) {
       bounds.add(r.box);
       centres.add(r.centre());
@@ -178,8 +167,8 @@ void CameraSpaceBvh::build(const std::vector<uint32_t>& candidates) {
     tasks.pop_back();
     const auto first = refs.begin() + task.begin, last = refs.begin() + task.end;
     const uint32_t count = task.end - task.begin;
-    const Box& bounds = task.extent.bounds;
-    const Box& centres = task.extent.centres;
+    const Bounds3& bounds = task.extent.bounds;
+    const Bounds3& centres = task.extent.centres;
     Node& node = nodes_[task.node];
     node.lo = bounds.lo;
     node.hi = bounds.hi;
@@ -211,20 +200,20 @@ void CameraSpaceBvh::build(const std::vector<uint32_t>& candidates) {
       }
       // Sweep from the right to get the right-side costs, then from the left.
       double rightCost[kBins];
-      Box acc;
+      Bounds3 acc;
       uint32_t accCount = 0;
       for (int b = kBins - 1; b > 0; --b) {
         acc.add(bins[b].extent.bounds);
         accCount += bins[b].count;
-        rightCost[b] = accCount ? acc.halfArea() * accCount : kInf;
+        rightCost[b] = accCount ? halfArea(acc) * accCount : kInf;
       }
-      acc = Box();
+      acc = Bounds3();
       accCount = 0;
       for (int b = 1; b < kBins; ++b) {  // split between bins b - 1 and b
         acc.add(bins[b - 1].extent.bounds);
         accCount += bins[b - 1].count;
         if (!accCount) continue;
-        const double cost = acc.halfArea() * accCount + rightCost[b];
+        const double cost = halfArea(acc) * accCount + rightCost[b];
         if (cost < bestCost) {
           bestCost = cost;
           bestBin = b;
@@ -233,7 +222,7 @@ void CameraSpaceBvh::build(const std::vector<uint32_t>& candidates) {
     }
 
     const bool canSplit = bestCost < kInf;
-    const double area = bounds.halfArea();
+    const double area = halfArea(bounds);
     const bool sahSplits = canSplit && kTraversalCost * area + bestCost < count * area;
     uint32_t mid;
     Extent left, right;
