@@ -47,21 +47,26 @@ void BM_FrontEnd(benchmark::State& state) {
   FrontEndOutput fe;
   for (auto _ : state) {
     runFrontEnd(p.scene, p.camera, RenderOptions{}, fe);
-    benchmark::DoNotOptimize(fe.triangles.data());
+    benchmark::DoNotOptimize(fe.chunks.data());
   }
   state.SetLabel(kScenes[state.range(0)]);
-  state.counters["triangles"] = double(fe.triangles.size());
+  state.counters["triangles"] = double(fe.triangleCount());
 }
 BENCHMARK(BM_FrontEnd)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// Binning alone (nearest bounds and per-tile lists), chunk after chunk on one thread.
+void binAll(const Prepared& p, const tiled::DepthSetup& depth, tiled::Bins& bins) {
+  tiled::prepareBins(bins, kWidth, kHeight, p.fe.chunkCount);
+  for (size_t c = 0; c < p.fe.chunkCount; ++c) tiled::binChunk(bins, c, p.fe.chunks[c].triangles, depth);
+}
 
 void BM_Bin(benchmark::State& state) {
   const Prepared& p = prepared(kScenes[state.range(0)]);
   const tiled::DepthSetup depth{DepthFormat{}, p.camera.near, p.camera.far, p.camera.orthographic};
   tiled::Bins bins;
   for (auto _ : state) {
-    tiled::prepareBins(bins, kWidth, kHeight, p.fe.triangles.size(), 1);
-    tiled::binRange(bins, p.fe.triangles, depth, 0);
-    benchmark::DoNotOptimize(bins.lists.data());
+    binAll(p, depth, bins);
+    benchmark::DoNotOptimize(bins.chunks.data());
   }
   size_t entries = 0;
   for (int t = 0; t < bins.tileCount(); ++t) entries += bins.entries(t);
@@ -76,14 +81,13 @@ void BM_RasterTiles(benchmark::State& state) {
   const tiled::DepthSetup depth{DepthFormat::parse(kFormats[state.range(1)]), p.camera.near, p.camera.far,
                                 p.camera.orthographic};
   tiled::Bins bins;
-  tiled::prepareBins(bins, kWidth, kHeight, p.fe.triangles.size(), 1);
-  tiled::binRange(bins, p.fe.triangles, depth, 0);
+  binAll(p, depth, bins);
   auto scratch = std::make_unique<tiled::TileScratch>();
   tiled::RasterCounters counters;
   for (auto _ : state) {
     counters = {};
     for (int tile = 0; tile < bins.tileCount(); ++tile)
-      if (bins.entries(tile)) tiled::rasterizeTile(bins, tile, p.fe.triangles, depth, true, *scratch, counters);
+      if (bins.entries(tile)) tiled::rasterizeTile(bins, tile, depth, true, *scratch, counters);
   }
   state.SetLabel(std::string(kScenes[state.range(0)]) + " " + kFormats[state.range(1)]);
   state.counters["tests"] = double(counters.depthTests);

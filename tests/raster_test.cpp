@@ -29,7 +29,7 @@ bool setup(const dvec2 p[3], const double depth[3], SetupTriangle& t, FrontEndOu
            int w = W, int h = H) {
   HVertex v[3];
   for (int i = 0; i < 3; ++i) v[i] = {p[i].x * depth[i], p[i].y * depth[i], depth[i], depth[i]};
-  return setupTriangle(v, 0, 0, Rgba8{}, pixelCamera(w, h), Cull::None, counters, t);
+  return setupTriangle(v, 0, 0, pixelCamera(w, h), Cull::None, counters, t);
 }
 
 // Random coordinate with a random number of sub-pixel bits, sometimes exactly on a pixel centre.

@@ -10,7 +10,9 @@
 #include <fmt/format.h>
 #include <hwy/targets.h>
 #include <random>
+#include <set>
 
+#include "raster/halfspace.hpp"
 #include "raster/tiled.hpp"
 #include "test_scenes.hpp"
 
@@ -193,31 +195,64 @@ TEST(Tiled, IdenticalOnOddImageSizes) {
     }
 }
 
-// Binning in 1 or 3 contiguous ranges gives the same per-tile lists, read in range order.
-TEST(Tiled, BinsDoNotDependOnTheNumberOfRanges) {
-  const Scene scene = loadScene("builtin:random?n=3000&size=0.4");
+// Binning chunk by chunk, in any order, gives per-tile lists that, read in chunk order, list
+// every triangle touching the tile once, in submission order; the nearest bounds do not depend
+// on the order either.
+TEST(Tiled, BinsAreInSubmissionOrderWhateverTheChunkOrder) {
+  const Scene scene = loadScene("builtin:random?n=10000&size=0.4");
   const Camera cam = resolveCamera(frameBounds(scene.bounds()), 300, 200, scene.bounds());
   FrontEndOutput fe;
   runFrontEnd(scene, cam, RenderOptions{}, fe);
-  ASSERT_GT(fe.triangles.size(), 2000u);
+  ASSERT_GT(fe.chunkCount, 2u);
+  ASSERT_GT(fe.triangleCount(), 8000u);
   const tiled::DepthSetup depth{DepthFormat{}, cam.near, cam.far, cam.orthographic};
-  auto binned = [&](int ranges) {
+  auto binned = [&](bool reverse) {
     tiled::Bins bins;
-    tiled::prepareBins(bins, cam.width, cam.height, fe.triangles.size(), ranges);
-    for (int r = ranges - 1; r >= 0; --r) tiled::binRange(bins, fe.triangles, depth, r);  // any order
-    std::vector<std::vector<uint32_t>> lists(size_t(bins.tileCount()));
-    for (const auto& range : bins.lists)
+    tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
+    for (size_t i = 0; i < fe.chunkCount; ++i) {
+      const size_t c = reverse ? fe.chunkCount - 1 - i : i;
+      tiled::binChunk(bins, c, fe.chunks[c].triangles, depth);
+    }
+    // Per tile: (submission position, nearest) of each entry, in list order.
+    std::vector<std::vector<std::pair<size_t, double>>> lists(size_t(bins.tileCount()));
+    size_t base = 0;
+    for (size_t c = 0; c < fe.chunkCount; ++c) {
+      const tiled::ChunkBins& cb = bins.chunks[c];
       for (int t = 0; t < bins.tileCount(); ++t)
-        lists[size_t(t)].insert(lists[size_t(t)].end(), range[size_t(t)].begin(), range[size_t(t)].end());
-    return std::make_pair(lists, bins.nearest);
+        for (uint32_t k = cb.start[size_t(t)]; k < cb.start[size_t(t) + 1]; ++k)
+          lists[size_t(t)].emplace_back(base + cb.items[k], cb.nearest[cb.items[k]]);
+      base += fe.chunks[c].triangles.size();
+    }
+    return lists;
   };
-  const auto one = binned(1), three = binned(3);
-  EXPECT_EQ(one.first, three.first);
-  EXPECT_EQ(one.second, three.second);
-  size_t entries = 0, multi = 0;
-  for (const auto& list : one.first) entries += list.size();
-  multi = entries - fe.triangles.size();
-  EXPECT_GT(multi, 100u);  // some triangles were binned to several tiles
+  const auto forward = binned(false), backward = binned(true);
+  EXPECT_EQ(forward, backward);
+  const std::vector<SetupTriangle> all = fe.flatten();
+  size_t entries = 0;
+  std::set<std::pair<size_t, size_t>> listed;  // (triangle, tile)
+  for (size_t t = 0; t < forward.size(); ++t) {
+    const int tx = int(t) % ((cam.width + tiled::kTileSize - 1) / tiled::kTileSize);
+    const int ty = int(t) / ((cam.width + tiled::kTileSize - 1) / tiled::kTileSize);
+    for (size_t k = 0; k < forward[t].size(); ++k) {
+      const size_t i = forward[t][k].first;
+      if (k > 0) EXPECT_LT(forward[t][k - 1].first, i) << "tile " << t;  // strictly increasing
+      // The triangle's box overlaps the tile.
+      EXPECT_LE(all[i].minX / tiled::kTileSize, tx);
+      EXPECT_GE(all[i].maxX / tiled::kTileSize, tx);
+      EXPECT_LE(all[i].minY / tiled::kTileSize, ty);
+      EXPECT_GE(all[i].maxY / tiled::kTileSize, ty);
+      listed.insert({i, t});
+    }
+    entries += forward[t].size();
+  }
+  // Every tile where a triangle covers a pixel lists it (no entry lost by the sort).
+  const int tilesX = (cam.width + tiled::kTileSize - 1) / tiled::kTileSize;
+  for (size_t i = 0; i < all.size(); ++i)
+    rasterizeHalfSpace(all[i], [&](int x, int y, double) {
+      const size_t t = size_t((y / tiled::kTileSize) * tilesX + x / tiled::kTileSize);
+      EXPECT_TRUE(listed.count({i, t})) << "triangle " << i << " covers (" << x << ", " << y << ") but is not in tile " << t;
+    });
+  EXPECT_GT(entries - all.size(), 100u);  // some triangles were binned to several tiles
 }
 
 // Depth only: no ids, no colour; depth is the stored value mapped back, identical to the

@@ -15,6 +15,7 @@
 #include "algorithms/algorithms.hpp"
 #include "core/depth_map.hpp"
 #include "core/parallel.hpp"
+#include "core/shading.hpp"
 #include "core/timer.hpp"
 #include "frontend/frontend.hpp"
 #include "raster/halfspace.hpp"
@@ -31,8 +32,8 @@ struct Counters {
 // ---------------------------------------------------------------------------------------------
 // The reference: one frame for depth storage S and mapping M, fragment by fragment.
 template <DepthStorage S, DepthMapping M>
-void drawReference(const std::vector<SetupTriangle>& tris, const Camera& cam, const RenderOptions& opt, Frame& frame,
-                   Counters& n, uint64_t& bufferBytes) {
+void drawReference(const std::vector<SetupTriangle>& tris, const Camera& cam, const RenderOptions& opt,
+                   const TriangleShader& shade, Frame& frame, Counters& n, uint64_t& bufferBytes) {
   using T = DepthT<S>;
   constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
   const double n0 = cam.near, f0 = cam.far;
@@ -51,7 +52,6 @@ void drawReference(const std::vector<SetupTriangle>& tris, const Camera& cam, co
       if (greater ? z > zbuf[idx] : z < zbuf[idx]) {  // strictly nearer: ties keep the first
         zbuf[idx] = z;
         if (ids) triOf[idx] = i + 1;
-        if (color) frame.color[idx] = t.color;
         ++n.writes;
       }
     };
@@ -59,8 +59,9 @@ void drawReference(const std::vector<SetupTriangle>& tris, const Camera& cam, co
     else rasterizeHalfSpace(t, fragment);
   }
 
-  // Resolve: face id and exact eye depth (from the winning triangle's plane) per pixel; depth
-  // only: the eye depth of the stored value.
+  // Resolve: face id, colour and exact eye depth (from the winning triangle's plane) per pixel;
+  // depth only: the eye depth of the stored value. (Colour is that of the last fragment written,
+  // i.e. the winner's: shading it here, once, gives the same image.)
   for (int y = 0; y < cam.height; ++y)
     for (int x = 0; x < cam.width; ++x) {
       const size_t idx = frame.index(x, y);
@@ -73,6 +74,7 @@ void drawReference(const std::vector<SetupTriangle>& tris, const Camera& cam, co
         frame.faceId[idx] = int32_t(t.face);
         frame.triangleId[idx] = int32_t(t.triangle);
         frame.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
+        if (color) frame.color[idx] = shade(t.triangle);
       }
       ++n.covered;
     }
@@ -91,28 +93,20 @@ struct TiledState {
   std::vector<uint64_t> covered;                // per tile
 };
 
-// Threads pay off only with enough work: starting one costs ~50 us, as much as the kernel
-// spends on ~4000 small binned triangles; clearing and resolving a tile counts as 40 of them.
-// Binning gets one thread per 50000 triangles. (Measured on builtin scenes; a thread more on a
-// small frame is slower, a thread less on a big one wastes a core.)
+// Threads pay off only with enough work: handing work to a pool thread costs about as much as
+// the kernel spends on ~4000 small binned triangles; clearing and resolving a tile counts as 40
+// of them. (Measured on builtin scenes; a thread more on a small frame is slower, a thread less
+// on a big one wastes a core.)
 constexpr size_t kWorkPerThread = 4000;
 constexpr size_t kWorkPerTile = 40;
-constexpr size_t kTrianglesPerBinRange = 50000;
 
-void drawTiled(const std::vector<SetupTriangle>& tris, const Camera& cam, const RenderOptions& opt, Frame& frame,
-               TiledState& state, Counters& n, tiled::RasterCounters& total, Timer& timer, Stats& st) {
+// Rasterizes and resolves the binned frame tile by tile; each tile has one owner, so no locks;
+// counters are kept per tile and summed in tile order.
+void drawTiled(const RenderOptions& opt, const tiled::DepthSetup& depth,
+               const TriangleShader& shade, Frame& frame, TiledState& state, Counters& n,
+               tiled::RasterCounters& total) {
   const int threads = resolveThreads(opt.threads);
-  const tiled::DepthSetup depth{opt.depthFormat, cam.near, cam.far, cam.orthographic};
-  tiled::Bins& bins = state.bins;
-
-  // Bin: contiguous triangle ranges on up to `threads` threads, concatenated in range order.
-  const int ranges = int(std::clamp<size_t>(tris.size() / kTrianglesPerBinRange, 1, size_t(threads)));
-  tiled::prepareBins(bins, cam.width, cam.height, tris.size(), ranges);
-  parallelFor(0, size_t(ranges), ranges, [&](size_t r) { tiled::binRange(bins, tris, depth, int(r)); });
-  st.addTime("bin", timer.lap());
-
-  // Rasterize and resolve tile by tile; each tile has one owner, so no locks; counters are
-  // kept per tile and summed in tile order.
+  const tiled::Bins& bins = state.bins;
   state.work.clear();
   size_t work = 0;
   for (int tile = 0; tile < bins.tileCount(); ++tile)
@@ -130,8 +124,8 @@ void drawTiled(const std::vector<SetupTriangle>& tris, const Camera& cam, const 
     tiled::TileScratch& scratch = state.scratch[worker];
     for (size_t i; (i = next.fetch_add(1, std::memory_order_relaxed)) < state.work.size();) {
       const int tile = state.work[i];
-      tiled::rasterizeTile(bins, tile, tris, depth, ids, scratch, state.counters[size_t(tile)]);
-      state.covered[size_t(tile)] = tiled::resolveTile(bins, tile, tris, depth, opt.outputs, scratch, frame);
+      tiled::rasterizeTile(bins, tile, depth, ids, scratch, state.counters[size_t(tile)]);
+      state.covered[size_t(tile)] = tiled::resolveTile(bins, tile, depth, opt.outputs, &shade, scratch, frame);
     }
   });
   for (int tile = 0; tile < bins.tileCount(); ++tile) {
@@ -140,7 +134,6 @@ void drawTiled(const std::vector<SetupTriangle>& tris, const Camera& cam, const 
   }
   n.tests = total.depthTests;
   n.writes = total.depthWrites;
-  st.addTime("raster", timer.lap());
 }
 
 }  // namespace
@@ -151,22 +144,36 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
   Counters n;
   tiled::RasterCounters tiledCounters;
   uint64_t bufferBytes = 0;
-  thread_local TiledState state;  // the tiled path's buffers, kept for the next frame
+  // The tiled path's buffers, kept for the next frame by the calling thread. (Used through this
+  // reference: in a lambda run by a pool worker, the name would denote the worker's own copy.)
+  thread_local TiledState callerState;
+  TiledState& state = callerState;
   FrontEndOutput referenceFe;
   const bool isTiled = opt.raster == RasterKind::Tiled;
   FrontEndOutput& fe = isTiled ? state.fe : referenceFe;
-  runFrontEnd(scene, cam, opt, fe);
-  st.addTime("frontend", timer.lap());
+  const TriangleShader shade(scene, cam, opt.shading);
 
   if (isTiled) {
-    drawTiled(fe.triangles, cam, opt, frame, state, n, tiledCounters, timer, st);
+    // Each chunk is binned by the worker that set it up, while it is in that core's cache.
+    const tiled::DepthSetup depth{opt.depthFormat, cam.near, cam.far, cam.orthographic};
+    tiled::prepareBins(state.bins, cam.width, cam.height, (scene.triangles.size() + kChunkTriangles - 1) / kChunkTriangles);
+    runFrontEnd(scene, cam, opt, fe, [&](size_t chunk) {
+      tiled::binChunk(state.bins, chunk, fe.chunks[chunk].triangles, depth);
+    });
+    st.addTime("frontend", timer.lap());
+    drawTiled(opt, depth, shade, frame, state, n, tiledCounters);
+    st.addTime("raster", timer.lap());
     bufferBytes = state.bins.memoryBytes() + state.scratch.size() * sizeof(tiled::TileScratch) +
                   state.counters.capacity() * sizeof(tiled::RasterCounters) +
                   (state.work.capacity() + state.covered.capacity()) * sizeof(uint64_t);
   } else {
+    runFrontEnd(scene, cam, opt, fe);
+    const std::vector<SetupTriangle> tris = fe.flatten();
+    st.addTime("frontend", timer.lap());
     visitDepthFormat(opt.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
-      drawReference<S, M>(fe.triangles, cam, opt, frame, n, bufferBytes);
+      drawReference<S, M>(tris, cam, opt, shade, frame, n, bufferBytes);
     });
+    bufferBytes += tris.capacity() * sizeof(SetupTriangle);
     st.addTime("raster", timer.lap());
   }
 

@@ -4,7 +4,6 @@
 #include <cmath>
 
 #include "core/parallel.hpp"
-#include "core/shading.hpp"
 
 namespace hsr {
 namespace {
@@ -80,14 +79,14 @@ ProjectedVertex projectVertex(const HVertex& v) {
   return p;
 }
 
-bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, Rgba8 color, const Camera& cam, Cull cull,
+bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, const Camera& cam, Cull cull,
                    FrontEndCounters& counters, SetupTriangle& t) {
   const ProjectedVertex p[3] = {projectVertex(v[0]), projectVertex(v[1]), projectVertex(v[2])};
-  return setupTriangle(p, triIndex, face, color, cam, cull, counters, t);
+  return setupTriangle(p, triIndex, face, cam, cull, counters, t);
 }
 
-bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, Rgba8 color, const Camera& cam,
-                   Cull cull, FrontEndCounters& counters, SetupTriangle& t) {
+bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, const Camera& cam, Cull cull,
+                   FrontEndCounters& counters, SetupTriangle& t) {
   // Twice the signed area on the snapped grid, y down: negative = counter-clockwise as seen.
   const int64_t area = (v[1].X - v[0].X) * (v[2].Y - v[0].Y) - (v[1].Y - v[0].Y) * (v[2].X - v[0].X);
   if (area == 0) {
@@ -117,16 +116,21 @@ bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, R
   const int64_t half = kSubpixelOne / 2;
   const int64_t minX = std::min({v[0].X, v[1].X, v[2].X}), maxX = std::max({v[0].X, v[1].X, v[2].X});
   const int64_t minY = std::min({v[0].Y, v[1].Y, v[2].Y}), maxY = std::max({v[0].Y, v[1].Y, v[2].Y});
-  t.minX = int(std::max<int64_t>(0, ceilDiv(minX - half, kSubpixelOne)));
-  t.maxX = int(std::min<int64_t>(cam.width - 1, floorDiv(maxX - half, kSubpixelOne)));
-  t.minY = int(std::max<int64_t>(0, ceilDiv(minY - half, kSubpixelOne)));
-  t.maxY = int(std::min<int64_t>(cam.height - 1, floorDiv(maxY - half, kSubpixelOne)));
-  if (t.minX > t.maxX || t.minY > t.maxY) {
+  const int64_t boxX0 = std::max<int64_t>(0, ceilDiv(minX - half, kSubpixelOne));
+  const int64_t boxX1 = std::min<int64_t>(cam.width - 1, floorDiv(maxX - half, kSubpixelOne));
+  const int64_t boxY0 = std::max<int64_t>(0, ceilDiv(minY - half, kSubpixelOne));
+  const int64_t boxY1 = std::min<int64_t>(cam.height - 1, floorDiv(maxY - half, kSubpixelOne));
+  if (boxX0 > boxX1 || boxY0 > boxY1) {
     // Off screen (inside the guard band) or too small to contain a pixel centre.
     if (maxX < 0 || maxY < 0 || minX > int64_t(cam.width) * kSubpixelOne || minY > int64_t(cam.height) * kSubpixelOne)
       ++counters.culledFrustum;
     return false;
   }
+  // In the image (< kMaxImageSize = 2^14): the box fits int16.
+  t.minX = int16_t(boxX0);
+  t.maxX = int16_t(boxX1);
+  t.minY = int16_t(boxY0);
+  t.maxY = int16_t(boxY1);
   // Depth planes through the unsnapped positions: snapping decides coverage only, so depth stays
   // exact for the true triangle. Fall back to the snapped positions when the unsnapped triangle is
   // (nearly) degenerate and its plane would be ill-conditioned.
@@ -136,26 +140,34 @@ bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, R
   t.depthDen = useExact ? planeThrough(ux, uy, den) : planeThrough(px, py, den);
   t.triangle = triIndex;
   t.face = face;
-  t.color = color;
   return true;
 }
 
+size_t FrontEndOutput::triangleCount() const {
+  size_t n = 0;
+  for (size_t c = 0; c < chunkCount; ++c) n += chunks[c].triangles.size();
+  return n;
+}
+
+std::vector<SetupTriangle> FrontEndOutput::flatten() const {
+  std::vector<SetupTriangle> all;
+  all.reserve(triangleCount());
+  forEach([&](const SetupTriangle& t) { all.push_back(t); });
+  return all;
+}
+
 uint64_t FrontEndOutput::memoryBytes() const {
-  uint64_t bytes = triangles.capacity() * sizeof(SetupTriangle) + hv.capacity() * sizeof(HVertex) +
-                   outcodes.capacity() + projected.capacity() * sizeof(ProjectedVertex) + faceVisible.capacity();
-  for (const auto& c : chunks) bytes += c.capacity() * sizeof(SetupTriangle);
+  uint64_t bytes = hv.capacity() * sizeof(HVertex) + outcodes.capacity() +
+                   projected.capacity() * sizeof(ProjectedVertex) + faceVisible.capacity();
+  for (const auto& c : chunks) bytes += c.triangles.capacity() * sizeof(SetupTriangle);
   return bytes;
 }
 
 namespace {
 
-// Triangles per chunk of front-end work: fixed, so results never depend on the thread count.
-constexpr size_t kChunkTriangles = 1 << 14;
-
 // Sets up the triangles [begin, end) into `out` in order, clipping where needed.
-void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& options, const TriangleShader& shade,
-                const FrontEndOutput& fe, size_t begin, size_t end, std::vector<SetupTriangle>& out,
-                FrontEndCounters& counters) {
+void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& options, const FrontEndOutput& fe,
+                size_t begin, size_t end, std::vector<SetupTriangle>& out, FrontEndCounters& counters) {
   out.clear();
   HVertex poly[3 + kPlanes], scratch[3 + kPlanes];
   SetupTriangle st;
@@ -170,11 +182,9 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
       ++counters.culledFrustum;
       continue;
     }
-    // Colour only when the frame keeps it (shading reads the face's vertices again).
-    const Rgba8 color = options.outputs == FrameOutputs::All ? shade(uint32_t(ti)) : options.background;
     if ((c0 | c1 | c2) == 0) {
       const ProjectedVertex p[3] = {fe.projected[tri.v[0]], fe.projected[tri.v[1]], fe.projected[tri.v[2]]};
-      if (setupTriangle(p, uint32_t(ti), tri.face, color, cam, options.cull, counters, st)) out.push_back(st);
+      if (setupTriangle(p, uint32_t(ti), tri.face, cam, options.cull, counters, st)) out.push_back(st);
       continue;
     }
     ++counters.clipped;
@@ -185,14 +195,15 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
     // The clipped polygon is convex: fan it. Every piece keeps the triangle's and face's index.
     for (int i = 1; i + 1 < n; ++i) {
       HVertex piece[3] = {poly[0], poly[i], poly[i + 1]};
-      if (setupTriangle(piece, uint32_t(ti), tri.face, color, cam, options.cull, counters, st)) out.push_back(st);
+      if (setupTriangle(piece, uint32_t(ti), tri.face, cam, options.cull, counters, st)) out.push_back(st);
     }
   }
 }
 
 }  // namespace
 
-void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& options, FrontEndOutput& out) {
+void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& options, FrontEndOutput& out,
+                 const ChunkConsumer& consumer) {
   static_cast<FrontEndCounters&>(out) = FrontEndCounters{};
   const int threads = resolveThreads(options.threads);
 
@@ -231,25 +242,19 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
     }
   });
 
-  // Triangles in fixed chunks, each into its own list, then concatenated in order.
-  const TriangleShader shade(scene, cam, options.shading);
+  // Triangles in fixed chunks, each into its own list (read in chunk order, they are the
+  // submission order), each handed to the consumer by the worker that set it up.
   const size_t nt = scene.triangles.size();
-  const size_t chunks = (nt + kChunkTriangles - 1) / kChunkTriangles;
-  if (out.chunks.size() < chunks) out.chunks.resize(chunks);
-  out.chunkCounters.assign(chunks, FrontEndCounters{});
-  parallelFor(0, chunks, threads, [&](size_t c) {
-    setupRange(scene, cam, options, shade, out, c * kChunkTriangles, std::min(nt, (c + 1) * kChunkTriangles),
-               out.chunks[c], out.chunkCounters[c]);
+  out.chunkCount = (nt + kChunkTriangles - 1) / kChunkTriangles;
+  if (out.chunks.size() < out.chunkCount) out.chunks.resize(out.chunkCount);
+  parallelFor(0, out.chunkCount, threads, [&](size_t c) {
+    FrontEndChunk& chunk = out.chunks[c];
+    chunk.counters = FrontEndCounters{};
+    setupRange(scene, cam, options, out, c * kChunkTriangles, std::min(nt, (c + 1) * kChunkTriangles), chunk.triangles,
+               chunk.counters);
+    if (consumer) consumer(c);
   });
-  std::vector<size_t> offset(chunks + 1, 0);
-  for (size_t c = 0; c < chunks; ++c) {
-    offset[c + 1] = offset[c] + out.chunks[c].size();
-    out.add(out.chunkCounters[c]);
-  }
-  out.triangles.resize(offset[chunks]);
-  parallelFor(0, chunks, threads, [&](size_t c) {
-    std::copy(out.chunks[c].begin(), out.chunks[c].end(), out.triangles.begin() + std::ptrdiff_t(offset[c]));
-  });
+  for (size_t c = 0; c < out.chunkCount; ++c) out.add(out.chunks[c].counters);
 }
 
 }  // namespace hsr

@@ -1,12 +1,15 @@
 // The geometry front end shared by every rasterizing algorithm: world -> homogeneous pixel
 // coordinates (double, relative to the camera), clipping (near, far, guard band), perspective
 // divide, snapping to 1/256 pixel, culling and triangle setup (integer edge functions with the
-// top-left rule, depth planes). Produces SetupTriangles in submission order; consumed by the
-// rasterizers (raster/) through the algorithms. Called from one thread; spreads its fixed chunks
-// of vertices and triangles over the thread pool (core/parallel.hpp).
+// top-left rule, depth planes). Produces SetupTriangles in submission order, in fixed chunks of
+// scene triangles; consumed by the rasterizers (raster/) through the algorithms, chunk by
+// chunk. Called from one thread; spreads its chunks of vertices and triangles over the thread
+// pool (core/parallel.hpp) and hands each finished chunk to an optional consumer on the same
+// worker, while the chunk is still in that core's cache (the tiled rasterizer bins it there).
 #pragma once
 #include <hsr/render.hpp>
 
+#include <functional>
 #include <vector>
 
 namespace hsr {
@@ -31,14 +34,15 @@ struct Plane {
 
 /// A triangle ready to rasterize. Vertices are in fixed point (1/256 pixel), ordered so that the
 /// edge functions E_i are positive inside (see raster/edge.hpp); bounding box in whole pixels.
+/// 96 bytes: everything the rasterizers and the resolve read, nothing else (colour is shaded
+/// from `triangle` when a pixel is resolved, for the winners only).
 struct SetupTriangle {
   int32_t x[3], y[3];
-  int minX, minY, maxX, maxY;  // inclusive pixel range whose centres may be covered, in the image
-  Plane depthNum, depthDen;    // eye depth at pixel position p = depthNum(p) / depthDen(p)
-  uint32_t triangle;           // index into Scene::triangles
+  int16_t minX, minY, maxX, maxY;  // inclusive pixel range whose centres may be covered, in the image
+  Plane depthNum, depthDen;        // eye depth at pixel position p = depthNum(p) / depthDen(p)
+  uint32_t triangle;               // index into Scene::triangles
   uint32_t face;
-  Rgba8 color;
-  bool frontFacing;            // counter-clockwise as seen by the camera
+  bool frontFacing;                // counter-clockwise as seen by the camera
 
   double eyeDepth(double px, double py) const { return depthNum.at(px, py) / depthDen.at(px, py); }
 };
@@ -66,8 +70,32 @@ struct FrontEndCounters {
   }
 };
 
+/// Scene triangles per chunk of front-end work: fixed, so results never depend on the thread
+/// count; small enough that a chunk's set-up triangles (<= 7 pieces a triangle when clipped,
+/// mostly 1) stay in a core's L2 cache until they are binned.
+inline constexpr size_t kChunkTriangles = 1 << 12;
+
+/// The set-up triangles of one chunk of scene triangles, in submission order.
+struct FrontEndChunk {
+  std::vector<SetupTriangle> triangles;
+  FrontEndCounters counters;
+};
+
 struct FrontEndOutput : FrontEndCounters {
-  std::vector<SetupTriangle> triangles;  // in submission order
+  /// chunks[0, chunkCount): read in order, all set-up triangles in submission order. (The
+  /// vector may hold more chunks from an earlier, larger frame: their memory is kept.)
+  std::vector<FrontEndChunk> chunks;
+  size_t chunkCount = 0;
+
+  size_t triangleCount() const;
+  /// Calls f(const SetupTriangle&) for every set-up triangle, in submission order.
+  template <class F>
+  void forEach(F&& f) const {
+    for (size_t c = 0; c < chunkCount; ++c)
+      for (const SetupTriangle& t : chunks[c].triangles) f(t);
+  }
+  /// All set-up triangles in one list (a copy; for tests and tools).
+  std::vector<SetupTriangle> flatten() const;
   uint64_t memoryBytes() const;
 
   // Scratch reused from frame to frame (no allocation once warm).
@@ -75,24 +103,28 @@ struct FrontEndOutput : FrontEndCounters {
   std::vector<uint8_t> outcodes;
   std::vector<ProjectedVertex> projected;
   std::vector<uint8_t> faceVisible;
-  std::vector<std::vector<SetupTriangle>> chunks;
-  std::vector<FrontEndCounters> chunkCounters;
 };
+
+/// Called on a worker thread with each chunk's index as soon as the chunk is set up; chunks may
+/// finish in any order and concurrently, so a consumer writes only to its chunk's own data.
+using ChunkConsumer = std::function<void(size_t chunk)>;
 
 /// Projects and snaps a vertex that lies inside the clip volume.
 ProjectedVertex projectVertex(const HVertex& v);
 
 /// Sets up one triangle whose vertices are inside the clip volume: culls and fills `t`.
 /// Returns false, counting the reason in `counters`, when it draws nothing.
-bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, Rgba8 color, const Camera& cam,
-                   Cull cull, FrontEndCounters& counters, SetupTriangle& t);
+bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, const Camera& cam, Cull cull,
+                   FrontEndCounters& counters, SetupTriangle& t);
 /// The same from homogeneous coordinates (projects first).
-bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, Rgba8 color, const Camera& cam,
-                   Cull cull, FrontEndCounters& counters, SetupTriangle& t);
+bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, const Camera& cam, Cull cull,
+                   FrontEndCounters& counters, SetupTriangle& t);
 
 /// Runs the front end over all scene triangles, in order, on up to options.threads threads; the
 /// work is split into fixed chunks, so the output never depends on the thread count.
-/// `out` is reused across frames.
-void runFrontEnd(const Scene& scene, const Camera& camera, const RenderOptions& options, FrontEndOutput& out);
+/// `out` is reused across frames. `consumer`, when given, is called once per chunk (see
+/// ChunkConsumer), before runFrontEnd returns.
+void runFrontEnd(const Scene& scene, const Camera& camera, const RenderOptions& options, FrontEndOutput& out,
+                 const ChunkConsumer& consumer = {});
 
 }  // namespace hsr

@@ -14,9 +14,9 @@ template <class Visit>
 void rasterizeHalfSpace(const SetupTriangle& t, Visit&& visit) {
   const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
   for (int by = t.minY; by <= t.maxY; by += kRasterBlock) {
-    const int y1 = std::min(by + kRasterBlock - 1, t.maxY);
+    const int y1 = std::min<int>(by + kRasterBlock - 1, t.maxY);
     for (int bx = t.minX; bx <= t.maxX; bx += kRasterBlock) {
-      const int x1 = std::min(bx + kRasterBlock - 1, t.maxX);
+      const int x1 = std::min<int>(bx + kRasterBlock - 1, t.maxX);
       // Each edge function is linear, so over the block's pixel centres its extremes are at
       // the four corner centres: all corners outside -> block empty; all inside -> block full.
       bool full = true, empty = false;

@@ -117,12 +117,15 @@ void RasterizeTileT(const TileJob& job) {
   const V nV = hn::Set(d, n), fV = hn::Set(d, f), fMinusNV = hn::Set(d, f - n);
   const V lane = hn::Iota(d, 0.0);
 
-  for (const auto& rangeLists : bins.lists)
-    for (const uint32_t ti : rangeLists[size_t(job.tile)]) {
-      const SetupTriangle& t = job.triangles[ti];
+  for (size_t chunk = 0; chunk < bins.chunkCount; ++chunk) {
+    const ChunkBins& cb = bins.chunks[chunk];
+    const SetupTriangle* tris = bins.triangles[chunk];
+    for (uint32_t item = cb.start[size_t(job.tile)], end = cb.start[size_t(job.tile) + 1]; item < end; ++item) {
+      const uint32_t ti = cb.items[item];
+      const SetupTriangle& t = tris[ti];
       // Early rejection: the triangle's nearest possible value is not nearer than the farthest
       // value stored in the tile, so none of its fragments can win here.
-      const double qNear = bins.nearest[ti];
+      const double qNear = cb.nearest[ti];
       if (s.tileFarStale) {  // the farthest of the blocks' farthest values
         V far = nearestV;
         for (size_t b = 0; b < size_t(kBlocksPerTile); b += N) {
@@ -147,7 +150,7 @@ void RasterizeTileT(const TileJob& job) {
         biasV[i] = hn::Set(d, double(e[i].bias));
       }
       const V qNearV = hn::Set(d, qNear);
-      const auto idV = hn::Set(du, uint64_t(ti) + 1);
+      const auto idV = hn::Set(du, triangleKey(chunk, ti));
       const V numA = hn::Set(d, t.depthNum.a), numC = hn::Set(d, t.depthNum.c);
       const V denA = hn::Set(d, t.depthDen.a), denC = hn::Set(d, t.depthDen.c);
       // A triangle parallel to the image plane has both planes constant (a = b = 0): a*X and
@@ -251,6 +254,7 @@ void RasterizeTileT(const TileJob& job) {
           }
         }
     }
+  }
   count.depthTests = tests;
   count.depthWrites = writes;
   job.counters->add(count);
@@ -318,6 +322,17 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, int x0, int y0, i
   const hn::Rebind<int32_t, D> di;
   const hn::Rebind<uint32_t, D> du32;
   const size_t N = hn::Lanes(d);
+  const Bins& bins = *job.bins;
+  // Colour is shaded here, for winners only; neighbouring pixels mostly share their triangle.
+  uint64_t lastKey = 0;
+  Rgba8 lastColor{};
+  [[maybe_unused]] auto colorOf = [&](uint64_t key, const SetupTriangle& t) {
+    if (key != lastKey) {
+      lastKey = key;
+      lastColor = (*job.shader)(t.triangle);
+    }
+    return lastColor;
+  };
   uint64_t covered = 0;
   for (int y = 0; y < h; ++y) {
     const double Y = double(y0 + y) + 0.5;
@@ -328,7 +343,7 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, int x0, int y0, i
       if (hn::AllTrue(du, hn::Eq(idV, hn::Zero(du)))) continue;
       const size_t at = frame.index(x0 + int(k), y0 + y);
       if (count == N && ids[0] != 0 && hn::AllTrue(du, hn::Eq(idV, hn::Set(du, ids[0])))) {
-        const SetupTriangle& t = job.triangles[ids[0] - 1];
+        const SetupTriangle& t = bins.triangle(ids[0]);
         const V X = hn::Iota(d, double(x0 + int(k)) + 0.5);
         const V num = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthNum.a), X), hn::Set(d, t.depthNum.b * Y)),
                               hn::Set(d, t.depthNum.c));
@@ -339,7 +354,8 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, int x0, int y0, i
         hn::StoreU(hn::Set(di, int32_t(t.triangle)), di, frame.triangleId.data() + at);
         if constexpr (kColor) {
           uint32_t rgba;
-          std::memcpy(&rgba, &t.color, sizeof rgba);
+          const Rgba8 color = colorOf(ids[0], t);
+          std::memcpy(&rgba, &color, sizeof rgba);
           hn::StoreU(hn::Set(du32, rgba), du32, reinterpret_cast<uint32_t*>(frame.color.data() + at));
         }
         covered += N;
@@ -347,11 +363,11 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, int x0, int y0, i
       }
       for (size_t j = 0; j < count; ++j) {
         if (!ids[j]) continue;
-        const SetupTriangle& t = job.triangles[ids[j] - 1];
+        const SetupTriangle& t = bins.triangle(ids[j]);
         frame.faceId[at + j] = int32_t(t.face);
         frame.triangleId[at + j] = int32_t(t.triangle);
         frame.depth[at + j] = float(t.eyeDepth(double(x0 + int(k + j)) + 0.5, Y));
-        if constexpr (kColor) frame.color[at + j] = t.color;
+        if constexpr (kColor) frame.color[at + j] = colorOf(ids[j], t);
         ++covered;
       }
     }

@@ -29,14 +29,15 @@ HWY_EXPORT(KernelTarget);
 
 size_t Bins::entries(int tile) const {
   size_t n = 0;
-  for (const auto& range : lists) n += range[size_t(tile)].size();
+  for (size_t c = 0; c < chunkCount; ++c) n += chunks[c].start[size_t(tile) + 1] - chunks[c].start[size_t(tile)];
   return n;
 }
 
 uint64_t Bins::memoryBytes() const {
-  uint64_t bytes = nearest.capacity() * sizeof(double);
-  for (const auto& range : lists)
-    for (const auto& list : range) bytes += list.capacity() * sizeof(uint32_t) + sizeof(list);
+  uint64_t bytes = triangles.capacity() * sizeof(void*);
+  for (const ChunkBins& c : chunks)
+    bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.nearest.capacity() * sizeof(double) +
+             c.pairs.capacity() * sizeof(uint64_t) + sizeof(c);
   return bytes;
 }
 
@@ -105,20 +106,21 @@ double nearestStored(const SetupTriangle& t, const DepthSetup& depth) {
   else return std::floor(v * kDepthScale<S> + 0.5);
 }
 
-// Appends triangle `index` to the lists of the tiles it may cover: the tiles its box overlaps,
-// less those that one edge excludes (all four corner pixel centres of the box's part outside).
-void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector<std::vector<uint32_t>>& lists) {
+// Appends (tile << 32 | index) for each tile triangle `index` may cover: the tiles its box
+// overlaps, less those that one edge excludes (all four corner pixel centres of the box's part
+// outside).
+void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector<uint64_t>& pairs) {
   const int tx0 = t.minX / kTileSize, tx1 = t.maxX / kTileSize;
   const int ty0 = t.minY / kTileSize, ty1 = t.maxY / kTileSize;
   if (tx0 == tx1 && ty0 == ty1) {
-    lists[size_t(ty0 * tilesX + tx0)].push_back(index);
+    pairs.push_back(uint64_t(ty0 * tilesX + tx0) << 32 | index);
     return;
   }
   const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
   for (int ty = ty0; ty <= ty1; ++ty) {
-    const int y0 = std::max(ty * kTileSize, t.minY), y1 = std::min(ty * kTileSize + kTileSize - 1, t.maxY);
+    const int y0 = std::max<int>(ty * kTileSize, t.minY), y1 = std::min<int>(ty * kTileSize + kTileSize - 1, t.maxY);
     for (int tx = tx0; tx <= tx1; ++tx) {
-      const int x0 = std::max(tx * kTileSize, t.minX), x1 = std::min(tx * kTileSize + kTileSize - 1, t.maxX);
+      const int x0 = std::max<int>(tx * kTileSize, t.minX), x1 = std::min<int>(tx * kTileSize + kTileSize - 1, t.maxX);
       bool outside = false;
       for (const Edge& edge : e) {
         bool anyInside = false;
@@ -126,46 +128,55 @@ void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector
           anyInside |= edge.at(centerFixed(c & 1 ? x1 : x0), centerFixed(c & 2 ? y1 : y0)) >= edge.bias;
         outside |= !anyInside;
       }
-      if (!outside) lists[size_t(ty * tilesX + tx)].push_back(index);
+      if (!outside) pairs.push_back(uint64_t(ty * tilesX + tx) << 32 | index);
     }
   }
 }
 
 }  // namespace
 
-void prepareBins(Bins& bins, int width, int height, size_t triangleCount, int ranges) {
+void prepareBins(Bins& bins, int width, int height, size_t chunkCount) {
   bins.width = width;
   bins.height = height;
   bins.tilesX = (width + kTileSize - 1) / kTileSize;
   bins.tilesY = (height + kTileSize - 1) / kTileSize;
-  bins.lists.resize(size_t(std::max(ranges, 1)));
-  for (auto& range : bins.lists) range.resize(size_t(bins.tileCount()));
-  bins.nearest.resize(triangleCount);
+  bins.chunkCount = chunkCount;
+  if (bins.chunks.size() < chunkCount) bins.chunks.resize(chunkCount);
+  bins.triangles.assign(chunkCount, nullptr);
 }
 
-void binRange(Bins& bins, const std::vector<SetupTriangle>& tris, const DepthSetup& depth, int range) {
-  const size_t ranges = bins.lists.size(), n = tris.size();
-  const size_t begin = n * size_t(range) / ranges, end = n * size_t(range + 1) / ranges;
-  auto& lists = bins.lists[size_t(range)];
-  for (auto& list : lists) list.clear();
-  // One pass: with a million triangles, reading them twice from memory costs more than both steps.
+void binChunk(Bins& bins, size_t chunk, const std::vector<SetupTriangle>& tris, const DepthSetup& depth) {
+  ChunkBins& cb = bins.chunks[chunk];
+  bins.triangles[chunk] = tris.data();
+  const size_t n = tris.size(), tiles = size_t(bins.tileCount());
+  cb.nearest.resize(n);
+  cb.pairs.clear();
+  // One pass while the chunk is in cache: nearest bounds and (tile, triangle) pairs.
   visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() {
-    for (size_t i = begin; i < end; ++i) {
-      bins.nearest[i] = nearestStored<S, M>(tris[i], depth);
-      binTriangle(tris[i], uint32_t(i), bins.tilesX, lists);
+    for (size_t i = 0; i < n; ++i) {
+      cb.nearest[i] = nearestStored<S, M>(tris[i], depth);
+      binTriangle(tris[i], uint32_t(i), bins.tilesX, cb.pairs);
     }
   });
+  // Counting sort by tile, stable: each tile's triangles stay in submission order.
+  cb.start.assign(tiles + 1, 0);
+  for (uint64_t p : cb.pairs) ++cb.start[(p >> 32) + 1];
+  for (size_t t = 0; t < tiles; ++t) cb.start[t + 1] += cb.start[t];
+  cb.items.resize(cb.pairs.size());
+  for (uint64_t p : cb.pairs) cb.items[cb.start[p >> 32]++] = uint32_t(p);
+  for (size_t t = tiles; t > 0; --t) cb.start[t] = cb.start[t - 1];  // back to the beginnings
+  cb.start[0] = 0;
 }
 
-void rasterizeTile(const Bins& bins, int tile, const std::vector<SetupTriangle>& tris, const DepthSetup& depth,
-                   bool ids, TileScratch& scratch, RasterCounters& counters) {
-  const TileJob job{&bins, tile, tris.data(), depth, ids, &scratch, &counters};
+void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids, TileScratch& scratch,
+                   RasterCounters& counters) {
+  const TileJob job{&bins, tile, depth, ids, &scratch, &counters, nullptr};
   HWY_DYNAMIC_DISPATCH(RasterizeTile)(job);
 }
 
-uint64_t resolveTile(const Bins& bins, int tile, const std::vector<SetupTriangle>& tris, const DepthSetup& depth,
-                     FrameOutputs outputs, const TileScratch& scratch, Frame& frame) {
-  const TileJob job{&bins, tile, tris.data(), depth, outputs != FrameOutputs::DepthOnly, nullptr, nullptr};
+uint64_t resolveTile(const Bins& bins, int tile, const DepthSetup& depth, FrameOutputs outputs,
+                     const TriangleShader* shader, const TileScratch& scratch, Frame& frame) {
+  const TileJob job{&bins, tile, depth, outputs != FrameOutputs::DepthOnly, nullptr, nullptr, shader};
   return HWY_DYNAMIC_DISPATCH(ResolveTile)(job, scratch, outputs, frame);
 }
 

@@ -1,5 +1,5 @@
-// The tiled (sort-middle) rasterizer behind the default z-buffer: prepareBins()/binRange() sort
-// set-up triangles into per-tile lists in submission order, rasterizeTile() runs every triangle
+// The tiled (sort-middle) rasterizer behind the default z-buffer: prepareBins()/binChunk() sort
+// set-up triangles into per-tile lists in submission order, chunk by chunk, rasterizeTile() runs every triangle
 // of one tile through the SIMD kernel (raster/tile_kernel-inl.h) into a worker's tile-sized
 // depth and triangle buffers, resolveTile() writes that tile into the Frame. Plain functions
 // without threads: the z-buffer (algorithms/zbuffer.cpp) calls them via parallelFor, one owner
@@ -21,6 +21,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/shading.hpp"
 #include "frontend/frontend.hpp"
 
 // Block counters of the kernel (RasterCounters::blocks*, rowsCulled), on unless built with
@@ -47,21 +48,35 @@ struct DepthSetup {
   bool orthographic = false;
 };
 
-/// Per-tile triangle lists, filled by binRange() and reused across frames (capacity is kept).
-struct Bins {
-  int width = 0, height = 0, tilesX = 0, tilesY = 0;
-  /// lists[range][tile]: triangle indices of contiguous submission range `range` touching the
-  /// tile. Read in range order, they are one list in submission order; ranges let binning run
-  /// on several threads without changing the result.
-  std::vector<std::vector<std::vector<uint32_t>>> lists;
+/// The bins of one front-end chunk (FrontEndChunk): its triangles grouped by tile, in
+/// submission order within a tile, and the nearest bound of each. Reused across frames.
+struct ChunkBins {
+  std::vector<uint32_t> start;  // tileCount + 1 offsets: items[start[t], start[t + 1]) are tile t's
+  std::vector<uint32_t> items;  // indices into the chunk's triangles
   /// Per triangle: a stored depth value no fragment of it can be nearer than (conservative,
   /// format specific), or the nearest possible value when no safe bound exists.
   std::vector<double> nearest;
+  std::vector<uint64_t> pairs;  // scratch of binChunk(): tile << 32 | index, in submission order
+};
+
+/// Per-tile triangle lists of a frame: chunk by chunk, so that each chunk is binned by the worker
+/// that set it up (runFrontEnd's consumer); read in chunk order, a tile's lists are one list in
+/// submission order. A triangle is named by (chunk, index in chunk); the tile buffers store
+/// `triangleKey` of the winner.
+struct Bins {
+  int width = 0, height = 0, tilesX = 0, tilesY = 0;
+  size_t chunkCount = 0;
+  std::vector<ChunkBins> chunks;                  // [0, chunkCount) in use
+  std::vector<const SetupTriangle*> triangles;    // per chunk: its set-up triangles
 
   int tileCount() const { return tilesX * tilesY; }
   size_t entries(int tile) const;
   uint64_t memoryBytes() const;
+  const SetupTriangle& triangle(uint64_t key) const { return triangles[(key - 1) >> 32][uint32_t(key - 1)]; }
 };
+
+/// Names triangle `index` of chunk `chunk` in a tile buffer (0 = nothing drawn).
+inline uint64_t triangleKey(size_t chunk, uint32_t index) { return (uint64_t(chunk) << 32 | index) + 1; }
 
 /// Counts of the tile pass. depth_tests/writes of the statistics come from here.
 struct RasterCounters {
@@ -76,7 +91,7 @@ struct RasterCounters {
 };
 
 /// A worker's tile: stored depth (as double: every format's values are exact in it) and the
-/// winning triangle (index + 1, 0 = none), row-major kTileSize x kTileSize, plus the farthest
+/// winning triangle (triangleKey, 0 = none), row-major kTileSize x kTileSize, plus the farthest
 /// stored value per block and per tile that reject triangles early. Reused tile after tile.
 struct alignas(64) TileScratch {
   alignas(64) double depth[kTileSize * kTileSize];
@@ -86,33 +101,34 @@ struct alignas(64) TileScratch {
   bool tileFarStale;
 };
 
-/// Binning, in two steps so the caller can run the second on several threads: prepareBins()
-/// sizes the bins for a width x height image and splits the triangles into `ranges` contiguous
-/// parts; binRange(r) sorts part r into its own lists (clearing them first) and computes
-/// Bins::nearest of its triangles for the depth setup. Ranges share no output.
-void prepareBins(Bins& bins, int width, int height, size_t triangleCount, int ranges);
-void binRange(Bins& bins, const std::vector<SetupTriangle>& tris, const DepthSetup& depth, int range);
+/// Binning, in two steps: prepareBins() sizes the bins for a width x height image and
+/// `chunkCount` front-end chunks; binChunk(c) sorts chunk c's triangles into its own lists and
+/// computes their nearest bounds for the depth setup. Chunks share no output, so binChunk runs
+/// on any thread, in any order (as runFrontEnd's consumer).
+void prepareBins(Bins& bins, int width, int height, size_t chunkCount);
+void binChunk(Bins& bins, size_t chunk, const std::vector<SetupTriangle>& tris, const DepthSetup& depth);
 
 /// Rasterizes every triangle binned to `tile` into `scratch` (cleared first). With ids false,
 /// only depth is kept (no triangle ids). Adds to `counters`.
-void rasterizeTile(const Bins& bins, int tile, const std::vector<SetupTriangle>& tris, const DepthSetup& depth,
-                   bool ids, TileScratch& scratch, RasterCounters& counters);
+void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids, TileScratch& scratch,
+                   RasterCounters& counters);
 
 /// Writes the tile of `scratch` into `frame` as `outputs` asks: ids, eye depth of the winning
-/// triangle's plane at the pixel centre (exactly as the reference resolves it), colour; or, for
-/// DepthOnly, the eye depth of the stored value. Returns the number of covered pixels.
-uint64_t resolveTile(const Bins& bins, int tile, const std::vector<SetupTriangle>& tris, const DepthSetup& depth,
-                     FrameOutputs outputs, const TileScratch& scratch, Frame& frame);
+/// triangle's plane at the pixel centre (exactly as the reference resolves it), colour from
+/// `shader` (needed for FrameOutputs::All only); or, for DepthOnly, the eye depth of the stored
+/// value. Returns the number of covered pixels.
+uint64_t resolveTile(const Bins& bins, int tile, const DepthSetup& depth, FrameOutputs outputs,
+                     const TriangleShader* shader, const TileScratch& scratch, Frame& frame);
 
 /// What the kernel (tile_kernel-inl.h) needs for one tile (scratch and counters: rasterizing only).
 struct TileJob {
   const Bins* bins;
   int tile;
-  const SetupTriangle* triangles;
   DepthSetup depth;
   bool ids;  // keep the winning triangle per pixel (false: depth only)
   TileScratch* scratch;
   RasterCounters* counters;
+  const TriangleShader* shader;  // resolving colour only
 };
 
 /// Name of the instruction set the kernel dispatches to on this machine (e.g. "AVX3").
