@@ -313,6 +313,9 @@ int runRender(const RenderFlags& f) {
   // Reject output names no writer knows before any work is done.
   for (const Output& o : outputs)
     if (!o.path.empty()) hsr::checkOutputPath(o.kind, o.path);
+  if (f.view.depthOnly && (!f.out.empty() || !f.ids.empty()))
+    throw InputError("--depth-only keeps no colour or face ids: drop --out/--ids or --depth-only");
+  if (f.view.depthOnly && f.verify) throw InputError("--verify compares face ids, which --depth-only does not keep");
 
   Job job = f.view.prepare();
   job.options.verify = f.verify;

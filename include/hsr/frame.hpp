@@ -46,8 +46,14 @@ struct Frame {
   std::vector<Rgba8> color;         // shaded colour, background colour where empty
   Stats stats;
 
-  /// Sizes the buffers (reusing their memory) and clears them to background / -1 / +inf,
-  /// splitting the clear over up to `threads` threads.
+  /// Sizes the buffers for w x h, reusing their memory: depth always, faceId and triangleId when
+  /// `ids`, color when `color`; the others are emptied (a frame rendered with FrameOutputs
+  /// IdsAndDepth has no colour buffer, DepthOnly only depth). Contents are left as they are:
+  /// render() allocates, and every algorithm then writes every pixel (or calls clear()).
+  void allocate(int w, int h, bool ids = true, bool color = true);
+  /// Clears the sized buffers to background / -1 / +inf, split over up to `threads` threads.
+  void clear(Rgba8 background, int threads = 1);
+  /// allocate(w, h) with every buffer, then clear().
   void resize(int w, int h, Rgba8 background, int threads = 1);
   size_t index(int x, int y) const { return size_t(y) * size_t(width) + size_t(x); }
 };

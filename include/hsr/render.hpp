@@ -26,9 +26,10 @@ enum class Shading : uint8_t { Flat, Lambert, FaceId };
 /// to HalfSpace (the scalar reference and its test oracle). Scanline: document 003's.
 enum class RasterKind : uint8_t { Tiled, HalfSpace, Scanline };
 /// What the z-buffer resolves into the Frame. All: face and triangle ids, eye depth, colour.
-/// IdsAndDepth: no colour (it stays the background; color_writes 0). DepthOnly: only the depth
-/// buffer is kept — ids stay -1, colour the background, and depth is the eye depth recovered
-/// from the stored value by inverting the depth mapping (so it carries the format's rounding).
+/// IdsAndDepth: no colour (Frame::color is empty; color_writes 0). DepthOnly: only the depth
+/// buffer (faceId, triangleId and color are empty), and depth is the eye depth recovered from
+/// the stored value by inverting the depth mapping (so it carries the format's rounding).
+/// Buffers not asked for cost nothing: they are neither cleared nor written.
 enum class FrameOutputs : uint8_t { All, IdsAndDepth, DepthOnly };
 
 struct RenderOptions {

@@ -1,5 +1,7 @@
 // The visibility algorithms, one function each, registered in render.cpp. Each fills the whole
-// Frame (visibility buffer + statistics) from a finalized scene and a resolved camera.
+// Frame (visibility buffer + statistics) from a finalized scene and a resolved camera. render()
+// hands it sized but not cleared (Frame::allocate): an algorithm writes every pixel of the
+// buffers present, or calls Frame::clear() first.
 #pragma once
 #include <hsr/render.hpp>
 

@@ -40,6 +40,7 @@ void drawReference(const std::vector<SetupTriangle>& tris, const Camera& cam, co
   const bool ortho = cam.orthographic;
   const bool color = opt.outputs == FrameOutputs::All, ids = opt.outputs != FrameOutputs::DepthOnly;
   const T clear = quantizeDepth<S>(opt.depthFormat.clearValue());
+  frame.clear(opt.background, resolveThreads(opt.threads));
   std::vector<T> zbuf(size_t(cam.width) * cam.height, clear);
   std::vector<uint32_t> triOf(ids ? zbuf.size() : 0, 0);  // 0 = nothing drawn, else index + 1
   bufferBytes = zbuf.size() * sizeof(T) + triOf.size() * sizeof(uint32_t);
@@ -88,7 +89,6 @@ struct TiledState {
   FrontEndOutput fe;
   tiled::Bins bins;
   std::vector<tiled::TileScratch> scratch;
-  std::vector<int> work;                       // tiles with triangles, in tile order
   std::vector<tiled::RasterCounters> counters;  // per tile
   std::vector<uint64_t> covered;                // per tile
 };
@@ -99,33 +99,41 @@ struct TiledState {
 // on a big one wastes a core.)
 constexpr size_t kWorkPerThread = 4000;
 constexpr size_t kWorkPerTile = 40;
+// A worker's unit: up to 8 tiles side by side (512 pixels), resolved 8 rows at a time across
+// them. Measured writing 1920x1080x4 buffers in this order: 5.4 ms, vs 27 ms tile by tile.
+constexpr int kSegmentTiles = 8;
+constexpr int kResolveBand = 8;
 
-// Rasterizes and resolves the binned frame tile by tile; each tile has one owner, so no locks;
-// counters are kept per tile and summed in tile order.
-void drawTiled(const RenderOptions& opt, const tiled::DepthSetup& depth,
-               const TriangleShader& shade, Frame& frame, TiledState& state, Counters& n,
-               tiled::RasterCounters& total) {
+// Rasterizes and resolves the binned frame in segments of up to kSegmentTiles tiles of one
+// tile row: a worker rasterizes each tile of its segment into its own scratch, then resolves the
+// segment band by band across its tiles, so that the frame is written in long row pieces (see
+// tiled::resolveTile). Each tile has one owner, so no locks; counters are kept per tile and
+// summed in tile order.
+void drawTiled(const RenderOptions& opt, const tiled::DepthSetup& depth, const TriangleShader& shade, Frame& frame,
+               TiledState& state, Counters& n, tiled::RasterCounters& total) {
   const int threads = resolveThreads(opt.threads);
   const tiled::Bins& bins = state.bins;
-  state.work.clear();
+  const int segmentsX = (bins.tilesX + kSegmentTiles - 1) / kSegmentTiles;
+  const size_t segments = size_t(segmentsX) * size_t(bins.tilesY);
   size_t work = 0;
-  for (int tile = 0; tile < bins.tileCount(); ++tile)
-    if (size_t entries = bins.entries(tile)) {
-      state.work.push_back(tile);
-      work += entries + kWorkPerTile;
-    }
+  for (int tile = 0; tile < bins.tileCount(); ++tile) work += bins.entries(tile) + kWorkPerTile;
   const int workers = int(std::clamp<size_t>(work / kWorkPerThread, 1, size_t(threads)));
-  if (state.scratch.size() < size_t(workers)) state.scratch.resize(size_t(workers));
+  if (state.scratch.size() < size_t(workers) * kSegmentTiles) state.scratch.resize(size_t(workers) * kSegmentTiles);
   state.counters.assign(size_t(bins.tileCount()), {});
   state.covered.assign(size_t(bins.tileCount()), 0);
   const bool ids = opt.outputs != FrameOutputs::DepthOnly;
   std::atomic<size_t> next{0};
   parallelFor(0, size_t(workers), workers, [&](size_t worker) {
-    tiled::TileScratch& scratch = state.scratch[worker];
-    for (size_t i; (i = next.fetch_add(1, std::memory_order_relaxed)) < state.work.size();) {
-      const int tile = state.work[i];
-      tiled::rasterizeTile(bins, tile, depth, ids, scratch, state.counters[size_t(tile)]);
-      state.covered[size_t(tile)] = tiled::resolveTile(bins, tile, depth, opt.outputs, &shade, scratch, frame);
+    tiled::TileScratch* scratch = state.scratch.data() + worker * kSegmentTiles;
+    for (size_t seg; (seg = next.fetch_add(1, std::memory_order_relaxed)) < segments;) {
+      const int ty = int(seg) / segmentsX, tx0 = (int(seg) % segmentsX) * kSegmentTiles;
+      const int count = std::min(kSegmentTiles, bins.tilesX - tx0), first = ty * bins.tilesX + tx0;
+      for (int i = 0; i < count; ++i)
+        tiled::rasterizeTile(bins, first + i, depth, ids, scratch[i], state.counters[size_t(first + i)]);
+      for (int row = 0; row < tiled::kTileSize; row += kResolveBand)
+        for (int i = 0; i < count; ++i)
+          state.covered[size_t(first + i)] += tiled::resolveTile(bins, first + i, depth, opt.outputs, &shade,
+                                                                 opt.background, scratch[i], frame, row, row + kResolveBand);
     }
   });
   for (int tile = 0; tile < bins.tileCount(); ++tile) {
@@ -165,7 +173,7 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
     st.addTime("raster", timer.lap());
     bufferBytes = state.bins.memoryBytes() + state.scratch.size() * sizeof(tiled::TileScratch) +
                   state.counters.capacity() * sizeof(tiled::RasterCounters) +
-                  (state.work.capacity() + state.covered.capacity()) * sizeof(uint64_t);
+                  state.covered.capacity() * sizeof(uint64_t);
   } else {
     runFrontEnd(scene, cam, opt, fe);
     const std::vector<SetupTriangle> tris = fe.flatten();

@@ -46,23 +46,34 @@ std::string Stats::toJson(int indent) const {
   return j.dump(indent);
 }
 
-void Frame::resize(int w, int h, Rgba8 background, int threads) {
+void Frame::allocate(int w, int h, bool ids, bool withColor) {
   width = w;
   height = h;
   const size_t n = size_t(w) * size_t(h);
-  faceId.resize(n);
-  triangleId.resize(n);
   depth.resize(n);
-  color.resize(n);
-  // The clear is a pass over 16 bytes a pixel: worth splitting for large frames.
-  const size_t chunk = 1 << 16;
+  faceId.resize(ids ? n : 0);
+  triangleId.resize(ids ? n : 0);
+  color.resize(withColor ? n : 0);
+}
+
+void Frame::clear(Rgba8 background, int threads) {
+  // The clear is a pass over up to 16 bytes a pixel: worth splitting for large frames.
+  const size_t n = depth.size(), chunk = 1 << 16;
+  auto fill = [chunk](auto& buffer, size_t c, auto value) {
+    const size_t b = std::min(buffer.size(), c * chunk), e = std::min(buffer.size(), b + chunk);
+    std::fill(buffer.begin() + std::ptrdiff_t(b), buffer.begin() + std::ptrdiff_t(e), value);
+  };
   parallelFor(0, (n + chunk - 1) / chunk, threads, [&](size_t c) {
-    const size_t b = c * chunk, e = std::min(n, b + chunk);
-    std::fill(faceId.begin() + std::ptrdiff_t(b), faceId.begin() + std::ptrdiff_t(e), -1);
-    std::fill(triangleId.begin() + std::ptrdiff_t(b), triangleId.begin() + std::ptrdiff_t(e), -1);
-    std::fill(depth.begin() + std::ptrdiff_t(b), depth.begin() + std::ptrdiff_t(e), std::numeric_limits<float>::infinity());
-    std::fill(color.begin() + std::ptrdiff_t(b), color.begin() + std::ptrdiff_t(e), background);
+    fill(faceId, c, -1);
+    fill(triangleId, c, -1);
+    fill(depth, c, std::numeric_limits<float>::infinity());
+    fill(color, c, background);
   });
+}
+
+void Frame::resize(int w, int h, Rgba8 background, int threads) {
+  allocate(w, h);
+  clear(background, threads);
 }
 
 }  // namespace hsr

@@ -42,9 +42,14 @@ void render(const Scene& scene, const Camera& camera, const RenderOptions& optio
   if (options.depthFormat.mapping == DepthMapping::Inv && !(camera.near > 0))
     throw InputError("--depth-format: the inv mapping needs near > 0");
 
+  if (options.verify && options.outputs == FrameOutputs::DepthOnly)
+    throw InputError("--verify: compares face ids, which --depth-only does not keep");
+
   Timer total;
   frame.stats = Stats{};
-  frame.resize(camera.width, camera.height, options.background, resolveThreads(options.threads));
+  // Sized, not cleared: every algorithm writes every pixel (a pass over 33 MB less at 1080p).
+  frame.allocate(camera.width, camera.height, options.outputs != FrameOutputs::DepthOnly,
+                 options.outputs == FrameOutputs::All);
   frame.stats.width = camera.width;
   frame.stats.height = camera.height;
   frame.stats.faces = scene.faceCount();

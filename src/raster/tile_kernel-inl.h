@@ -27,6 +27,7 @@
 #include <limits>
 
 #include "core/depth_map.hpp"
+#include "raster/depth_bounds.hpp"
 #include "raster/edge.hpp"
 #include "raster/tiled.hpp"
 
@@ -78,6 +79,109 @@ HWY_INLINE V Quantize(V v) {
   }
 }
 
+// Stored values of triangle t at the pixel centres X (lanes) of the row whose centre is Y,
+// exactly as the reference computes them: ((a X + b Y) + c) per plane, their quotient,
+// mapDepth<M> and quantizeDepth<S>.
+template <DepthStorage S, DepthMapping M>
+HWY_INLINE V StoredDepth(const SetupTriangle& t, V X, double Y, V nV, V fV, V fMinusNV, bool ortho) {
+  const D d;
+  const V num = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthNum.a), X), hn::Set(d, t.depthNum.b * Y)),
+                        hn::Set(d, t.depthNum.c));
+  const V den = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthDen.a), X), hn::Set(d, t.depthDen.b * Y)),
+                        hn::Set(d, t.depthDen.c));
+  return Quantize<S>(MapDepth<M>(hn::Div(num, den), nV, fV, fMinusNV, ortho));
+}
+
+// The farther / nearer of two vectors of stored values, lane by lane.
+template <bool kGreater>
+HWY_INLINE V Farther(V a, V b) {
+  return kGreater ? hn::Min(a, b) : hn::Max(a, b);
+}
+template <bool kGreater>
+HWY_INLINE V NearerOf(V a, V b) {
+  return kGreater ? hn::Max(a, b) : hn::Min(a, b);
+}
+template <bool kGreater>
+HWY_INLINE double FarthestLane(V v) {
+  const D d;
+  return hn::GetLane(kGreater ? hn::MinOfLanes(d, v) : hn::MaxOfLanes(d, v));
+}
+template <bool kGreater>
+HWY_INLINE double NearestLane(V v) {
+  const D d;
+  return hn::GetLane(kGreater ? hn::MaxOfLanes(d, v) : hn::MinOfLanes(d, v));
+}
+
+// The tile's part of the image and the constants of its depth format.
+struct TileFrame {
+  int x0, y0, w, h;       // origin and size in the image
+  double clear;           // the format's clear value, as stored
+  double nearestPossible; // stored in cells outside the image: never drawn, never the farthest
+  double farthestPossible;
+};
+
+template <DepthStorage S, DepthMapping M>
+TileFrame MakeTileFrame(const TileJob& job) {
+  constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
+  const Bins& bins = *job.bins;
+  TileFrame f;
+  f.x0 = (job.tile % bins.tilesX) * kTileSize;
+  f.y0 = (job.tile / bins.tilesX) * kTileSize;
+  f.w = std::min(kTileSize, bins.width - f.x0);
+  f.h = std::min(kTileSize, bins.height - f.y0);
+  f.clear = double(quantizeDepth<S>(job.depth.format.clearValue()));
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  f.nearestPossible = kGreater ? inf : -inf;
+  f.farthestPossible = kGreater ? -inf : inf;
+  return f;
+}
+
+// Writes the tile's uniform state (cleared, or one triangle's plane over all of it) into its
+// pixel buffers, with the farthest value of each block, so that triangles can be drawn pixel by
+// pixel from here on. The plane's values are computed as the kernel computes every fragment,
+// so they are the bits drawing the triangle pixel by pixel would have stored.
+template <DepthStorage S, DepthMapping M, bool kIds>
+void Materialize(const TileJob& job, const TileFrame& f) {
+  constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
+  constexpr int kBlocksX = kTileSize / kBlockSize;
+  const D d;
+  const DU du;
+  const size_t N = hn::Lanes(d);
+  TileScratch& s = *job.scratch;
+  const bool plane = s.state == TileState::Plane;
+  const SetupTriangle* t = s.plane;
+  const V clearV = hn::Set(d, f.clear), outside = hn::Set(d, f.nearestPossible), widthV = hn::Set(d, double(f.w));
+  const V nV = hn::Set(d, job.depth.near), fV = hn::Set(d, job.depth.far), fMinusNV = hn::Set(d, job.depth.far - job.depth.near);
+  const auto keyV = hn::Set(du, plane ? s.planeKey : 0), zeroKey = hn::Zero(du);
+  V tileFar = outside;
+  for (int b = 0; b < kBlocksPerTile; ++b) {
+    const int bx = (b % kBlocksX) * kBlockSize, by = (b / kBlocksX) * kBlockSize;
+    V far = outside;
+    for (int y = by; y < by + kBlockSize; ++y)
+      for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+        const size_t at = size_t(y) * kTileSize + size_t(bx) + k;
+        const V col = hn::Iota(d, double(bx + int(k)));
+        Mask in = hn::Lt(col, widthV);
+        if (y >= f.h) in = hn::FirstN(d, 0);
+        V v = outside;
+        if (!hn::AllFalse(d, in)) {
+          const V drawn = plane ? StoredDepth<S, M>(*t, hn::Add(col, hn::Set(d, double(f.x0) + 0.5)), double(f.y0 + y) + 0.5,
+                                                   nV, fV, fMinusNV, job.depth.orthographic)
+                                : clearV;
+          v = hn::IfThenElse(in, drawn, outside);
+        }
+        hn::Store(v, d, s.depth + at);
+        if constexpr (kIds) hn::Store(hn::IfThenElse(hn::RebindMask(du, in), keyV, zeroKey), du, s.triangle + at);
+        far = Farther<kGreater>(far, v);
+      }
+    s.blockFar[b] = FarthestLane<kGreater>(far);
+    tileFar = Farther<kGreater>(tileFar, far);
+  }
+  s.tileFar = FarthestLane<kGreater>(tileFar);
+  s.tileFarStale = false;
+  s.state = TileState::Pixels;
+}
+
 template <DepthStorage S, DepthMapping M, bool kIds>
 void RasterizeTileT(const TileJob& job) {
   constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
@@ -89,33 +193,26 @@ void RasterizeTileT(const TileJob& job) {
   RasterCounters count;  // added to the job's at the end
   uint64_t tests = 0, writes = 0;  // the hottest counts, plain locals so they stay in registers
   const Bins& bins = *job.bins;
+  const TileFrame tf = MakeTileFrame<S, M>(job);
+  const int x0 = tf.x0, y0 = tf.y0, w = tf.w, h = tf.h;
 
-  // The tile in the image: origin (x0, y0), w x h pixels (less at the right and bottom edges).
-  const int x0 = (job.tile % bins.tilesX) * kTileSize, y0 = (job.tile / bins.tilesX) * kTileSize;
-  const int w = std::min(kTileSize, bins.width - x0), h = std::min(kTileSize, bins.height - y0);
-
-  // Clear: in-image cells to the format's clear value, the others to a value nearer than any
-  // (they are never drawn — triangles are clipped to the image — and never the farthest).
-  const double clear = double(quantizeDepth<S>(job.depth.format.clearValue()));
-  const double nearest = kGreater ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity();
-  const V clearV = hn::Set(d, clear), nearestV = hn::Set(d, nearest), widthV = hn::Set(d, double(w));
-  for (int y = 0; y < kTileSize; ++y)
-    for (size_t k = 0; k < size_t(kTileSize); k += N) {
-      const V v = y < h ? hn::IfThenElse(hn::Lt(hn::Iota(d, double(k)), widthV), clearV, nearestV) : nearestV;
-      hn::Store(v, d, s.depth + size_t(y) * kTileSize + k);
-      if constexpr (kIds) hn::Store(hn::Zero(du), du, s.triangle + size_t(y) * kTileSize + k);
-    }
-  for (int b = 0; b < kBlocksPerTile; ++b) {
-    const bool inImage = (b % kBlocksX) * kBlockSize < w && (b / kBlocksX) * kBlockSize < h;
-    s.blockFar[b] = inImage ? clear : nearest;
-  }
-  s.tileFar = clear;
+  // The tile starts cleared, as one uniform state: nothing is written to its buffers until a
+  // triangle covers only part of it.
+  s.state = TileState::Clear;
+  s.tileFar = tf.clear;
+  s.tileNear = tf.clear;
   s.tileFarStale = false;
 
   const double n = job.depth.near, f = job.depth.far;
   const bool ortho = job.depth.orthographic;
   const V nV = hn::Set(d, n), fV = hn::Set(d, f), fMinusNV = hn::Set(d, f - n);
+  const V nearestV = hn::Set(d, tf.nearestPossible), farthestV = hn::Set(d, tf.farthestPossible);
   const V lane = hn::Iota(d, 0.0);
+  // The tile's pixel centres (corners of the in-image part) for whole-tile tests and bounds.
+  const int64_t cornerX[2] = {centerFixed(x0), centerFixed(x0 + w - 1)};
+  const int64_t cornerY[2] = {centerFixed(y0), centerFixed(y0 + h - 1)};
+  const double rectX[4] = {x0 + 0.5, x0 + w - 0.5, x0 + w - 0.5, x0 + 0.5};
+  const double rectY[4] = {y0 + 0.5, y0 + 0.5, y0 + h - 0.5, y0 + h - 0.5};
 
   for (size_t chunk = 0; chunk < bins.chunkCount; ++chunk) {
     const ChunkBins& cb = bins.chunks[chunk];
@@ -128,22 +225,44 @@ void RasterizeTileT(const TileJob& job) {
       const double qNear = cb.nearest[ti];
       if (s.tileFarStale) {  // the farthest of the blocks' farthest values
         V far = nearestV;
-        for (size_t b = 0; b < size_t(kBlocksPerTile); b += N) {
-          const V v = hn::Load(d, s.blockFar + b);
-          far = kGreater ? hn::Min(far, v) : hn::Max(far, v);
-        }
-        s.tileFar = hn::GetLane(kGreater ? hn::MinOfLanes(d, far) : hn::MaxOfLanes(d, far));
+        for (size_t b = 0; b < size_t(kBlocksPerTile); b += N) far = Farther<kGreater>(far, hn::Load(d, s.blockFar + b));
+        s.tileFar = FarthestLane<kGreater>(far);
         s.tileFarStale = false;
       }
-      if (!(kGreater ? qNear > s.tileFar : qNear < s.tileFar)) {
+      if (!storedNearer<M>(qNear, s.tileFar)) {
         ++count.culledTiles;
         continue;
       }
+      const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
+
+      // Whole tile: the triangle covers every pixel centre of the tile (its four corner centres;
+      // coverage is convex) and its farthest value is nearer than the nearest stored: it wins
+      // every pixel, and the tile becomes its plane, in O(1) ("lossless z-buffer compression").
+      if (t.minX <= x0 && t.maxX >= x0 + w - 1 && t.minY <= y0 && t.maxY >= y0 + h - 1) {
+        bool covers = true;
+        for (const Edge& edge : e)
+          for (int c = 0; c < 4; ++c) covers &= edge.at(cornerX[c & 1], cornerY[c >> 1]) >= edge.bias;
+        if (covers) {
+          const StoredRange r = storedRange<S, M>(t.depthNum, t.depthDen, rectX, rectY, 4, n, f, ortho);
+          if (storedNearer<M>(r.farthest, s.tileNear)) {
+            s.state = TileState::Plane;
+            s.plane = &t;
+            s.planeKey = triangleKey(chunk, ti);
+            s.tileFar = r.farthest;
+            s.tileNear = r.nearest;
+            s.tileFarStale = false;
+            tests += uint64_t(w) * uint64_t(h);
+            writes += uint64_t(w) * uint64_t(h);
+            ++count.tilesWhole;
+            continue;
+          }
+        }
+      }
+      if (s.state != TileState::Pixels) Materialize<S, M, kIds>(job, tf);
 
       // The triangle's pixel box within the tile, tile-local and inclusive.
       const int rx0 = std::max(t.minX - x0, 0), rx1 = std::min(t.maxX - x0, w - 1);
       const int ry0 = std::max(t.minY - y0, 0), ry1 = std::min(t.maxY - y0, h - 1);
-      const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
       V laneE[3], biasV[3];
       for (int i = 0; i < 3; ++i) {
         laneE[i] = hn::Mul(lane, hn::Set(d, double(e[i].stepX())));  // lane j: j * stepX, exact
@@ -151,8 +270,6 @@ void RasterizeTileT(const TileJob& job) {
       }
       const V qNearV = hn::Set(d, qNear);
       const auto idV = hn::Set(du, triangleKey(chunk, ti));
-      const V numA = hn::Set(d, t.depthNum.a), numC = hn::Set(d, t.depthNum.c);
-      const V denA = hn::Set(d, t.depthDen.a), denC = hn::Set(d, t.depthDen.c);
       // A triangle parallel to the image plane has both planes constant (a = b = 0): a*X and
       // b*Y are zeros of a fixed sign, so every pixel computes the same bits as its first one.
       const bool constantDepth = t.depthNum.a == 0 && t.depthNum.b == 0 && t.depthDen.a == 0 && t.depthDen.b == 0;
@@ -160,11 +277,12 @@ void RasterizeTileT(const TileJob& job) {
           constantDepth
               ? hn::Set(d, double(quantizeDepth<S>(mapDepth<M>(t.eyeDepth(x0 + rx0 + 0.5, y0 + ry0 + 0.5), n, f, ortho))))
               : hn::Zero(d);
+      V nearestWritten = farthestV;
 
       for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
         for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx) {
           const int b = by * kBlocksX + bx;
-          if (!(kGreater ? qNear > s.blockFar[b] : qNear < s.blockFar[b])) {
+          if (!storedNearer<M>(qNear, s.blockFar[b])) {
             if constexpr (kCountBlocks) ++count.blocksCulled;
             continue;
           }
@@ -195,7 +313,6 @@ void RasterizeTileT(const TileJob& job) {
           bool wrote = false;
           for (int y = cy0; y <= cy1; ++y) {
             const double Y = double(y0 + y) + 0.5;
-            const V numRow = hn::Set(d, t.depthNum.b * Y), denRow = hn::Set(d, t.depthDen.b * Y);
             for (size_t k = 0; k < size_t(kBlockSize); k += N) {
               const size_t at = size_t(y) * kTileSize + size_t(bxPixel) + k;
               const V stored = hn::Load(d, s.depth + at);
@@ -212,13 +329,9 @@ void RasterizeTileT(const TileJob& job) {
               const Mask maybe = hn::And(cover, Nearer<kGreater>(qNearV, stored));
               if (!hn::AllFalse(d, maybe)) {
                 // Pixel centres X = x + 0.5; depth = (a X + b Y + c) / (a' X + b' Y + c').
-                V z = zConstant;
-                if (!constantDepth) {
-                  const V X = hn::Add(col, hn::Set(d, double(x0) + 0.5));
-                  const V num = hn::Add(hn::Add(hn::Mul(numA, X), numRow), numC);
-                  const V den = hn::Add(hn::Add(hn::Mul(denA, X), denRow), denC);
-                  z = Quantize<S>(MapDepth<M>(hn::Div(num, den), nV, fV, fMinusNV, ortho));
-                }
+                const V z = constantDepth ? zConstant
+                                          : StoredDepth<S, M>(t, hn::Add(col, hn::Set(d, double(x0) + 0.5)), Y, nV,
+                                                              fV, fMinusNV, ortho);
                 const Mask win = hn::And(maybe, Nearer<kGreater>(z, stored));
                 tests += hn::CountTrue(d, maybe);
                 if (!hn::AllFalse(d, win)) {
@@ -229,12 +342,13 @@ void RasterizeTileT(const TileJob& job) {
                     const auto old = hn::Load(du, s.triangle + at);
                     hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
                   }
+                  nearestWritten = NearerOf<kGreater>(nearestWritten, hn::IfThenElse(win, z, farthestV));
                   wrote = true;
                 }
               } else if (kCountBlocks && !hn::AllFalse(d, cover)) {
                 ++count.rowsCulled;
               }
-              far = kGreater ? hn::Min(far, result) : hn::Max(far, result);
+              far = Farther<kGreater>(far, result);
             }
             for (int i = 0; i < 3; ++i) rowE[i] += e[i].stepY();
           }
@@ -243,16 +357,16 @@ void RasterizeTileT(const TileJob& job) {
             for (int y = by * kBlockSize; y < (by + 1) * kBlockSize; ++y) {
               if (y == cy0) y = cy1 + 1;
               if (y >= (by + 1) * kBlockSize) break;
-              for (size_t k = 0; k < size_t(kBlockSize); k += N) {
-                const V v = hn::Load(d, s.depth + size_t(y) * kTileSize + size_t(bxPixel) + k);
-                far = kGreater ? hn::Min(far, v) : hn::Max(far, v);
-              }
+              for (size_t k = 0; k < size_t(kBlockSize); k += N)
+                far = Farther<kGreater>(far, hn::Load(d, s.depth + size_t(y) * kTileSize + size_t(bxPixel) + k));
             }
             // The tile's farthest value can only move when the block that held it moved.
             s.tileFarStale |= s.blockFar[b] == s.tileFar;
-            s.blockFar[b] = hn::GetLane(kGreater ? hn::MinOfLanes(d, far) : hn::MaxOfLanes(d, far));
+            s.blockFar[b] = FarthestLane<kGreater>(far);
           }
         }
+      const double written = NearestLane<kGreater>(nearestWritten);
+      if (storedNearer<M>(written, s.tileNear)) s.tileNear = written;
     }
   }
   count.depthTests = tests;
@@ -289,33 +403,46 @@ HWY_INLINE void StorePartial(hn::Vec<DT> v, DT dt, size_t count, hn::TFromD<DT>*
   std::copy(lanes, lanes + count, p);
 }
 
-// Depth only: the eye depth of every stored value that left the clear value (+inf elsewhere).
+// Depth only: the eye depth of every stored value that left the clear value, +inf elsewhere
+// (every pixel of the tile is written).
 template <DepthStorage S, DepthMapping M>
-uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int x0, int y0, int w, int h, Frame& frame) {
+uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, int rowEnd, Frame& frame) {
   const D d;
   const hn::Rebind<float, D> df;
   const size_t N = hn::Lanes(d);
-  const V clearV = hn::Set(d, double(quantizeDepth<S>(job.depth.format.clearValue())));
+  const TileFrame tf = MakeTileFrame<S, M>(job);
+  const V clearV = hn::Set(d, tf.clear);
   const V infinity = hn::Set(d, std::numeric_limits<double>::infinity());
+  const V nV = hn::Set(d, job.depth.near), fV = hn::Set(d, job.depth.far);
+  const V fMinusNV = hn::Set(d, job.depth.far - job.depth.near);
   uint64_t covered = 0;
-  for (int y = 0; y < h; ++y)
-    for (size_t k = 0; k < size_t(w); k += N) {
-      const size_t count = std::min(N, size_t(w) - k);
-      const V q = hn::Load(d, s.depth + size_t(y) * kTileSize + k);
+  for (int y = rowBegin; y < std::min(rowEnd, tf.h); ++y)
+    for (size_t k = 0; k < size_t(tf.w); k += N) {
+      const size_t count = std::min(N, size_t(tf.w) - k);
+      float* out = frame.depth.data() + frame.index(tf.x0 + int(k), tf.y0 + y);
+      if (s.state == TileState::Clear) {
+        StorePartial(hn::DemoteTo(df, infinity), df, count, out);
+        continue;
+      }
+      const V q = s.state == TileState::Plane
+                      ? StoredDepth<S, M>(*s.plane, hn::Iota(d, double(tf.x0 + int(k)) + 0.5), double(tf.y0 + y) + 0.5,
+                                          nV, fV, fMinusNV, job.depth.orthographic)
+                      : hn::Load(d, s.depth + size_t(y) * kTileSize + k);
       const Mask drawn = hn::And(hn::FirstN(d, count), hn::Ne(q, clearV));
-      if (hn::AllFalse(d, drawn)) continue;
       covered += hn::CountTrue(d, drawn);
       const V eye = hn::IfThenElse(drawn, EyeDepthOfStored<S, M>(q, job.depth), infinity);
-      StorePartial(hn::DemoteTo(df, eye), df, count, frame.depth.data() + frame.index(x0 + int(k), y0 + y));
+      StorePartial(hn::DemoteTo(df, eye), df, count, out);
     }
   return covered;
 }
 
 // Ids (and colour): face id, triangle id and the eye depth of the winning triangle's planes at
-// the pixel centre, as the reference resolves it. A row of lanes won by one triangle is done
-// with vectors (the same operations as SetupTriangle::eyeDepth), others pixel by pixel.
+// the pixel centre, as the reference resolves it; the background where nothing was drawn
+// (every pixel of the tile is written). A row of lanes won by one triangle is done with vectors
+// (the same operations as SetupTriangle::eyeDepth), others pixel by pixel.
 template <bool kColor>
-uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, int x0, int y0, int w, int h, Frame& frame) {
+uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background, int rowBegin, int rowEnd,
+                     Frame& frame) {
   const D d;
   const DU du;
   const hn::Rebind<float, D> df;
@@ -323,6 +450,8 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, int x0, int y0, i
   const hn::Rebind<uint32_t, D> du32;
   const size_t N = hn::Lanes(d);
   const Bins& bins = *job.bins;
+  const int x0 = (job.tile % bins.tilesX) * kTileSize, y0 = (job.tile / bins.tilesX) * kTileSize;
+  const int w = std::min(kTileSize, bins.width - x0), h = std::min(kTileSize, bins.height - y0);
   // Colour is shaded here, for winners only; neighbouring pixels mostly share their triangle.
   uint64_t lastKey = 0;
   Rgba8 lastColor{};
@@ -333,17 +462,29 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, int x0, int y0, i
     }
     return lastColor;
   };
+  uint32_t backgroundBits;
+  std::memcpy(&backgroundBits, &background, sizeof backgroundBits);
+  const uint64_t uniformKey = s.state == TileState::Plane ? s.planeKey : 0;
   uint64_t covered = 0;
-  for (int y = 0; y < h; ++y) {
+  for (int y = rowBegin; y < std::min(rowEnd, h); ++y) {
     const double Y = double(y0 + y) + 0.5;
     for (size_t k = 0; k < size_t(w); k += N) {
       const uint64_t* ids = s.triangle + size_t(y) * kTileSize + k;
-      const auto idV = hn::Load(du, ids);
+      const bool uniform = s.state != TileState::Pixels;
+      const auto idV = uniform ? hn::Set(du, uniformKey) : hn::Load(du, ids);
+      const uint64_t first = uniform ? uniformKey : ids[0];
       const size_t count = std::min(N, size_t(w) - k);
-      if (hn::AllTrue(du, hn::Eq(idV, hn::Zero(du)))) continue;
       const size_t at = frame.index(x0 + int(k), y0 + y);
-      if (count == N && ids[0] != 0 && hn::AllTrue(du, hn::Eq(idV, hn::Set(du, ids[0])))) {
-        const SetupTriangle& t = bins.triangle(ids[0]);
+      if (hn::AllTrue(du, hn::Eq(idV, hn::Zero(du)))) {
+        StorePartial(hn::Set(df, std::numeric_limits<float>::infinity()), df, count, frame.depth.data() + at);
+        StorePartial(hn::Set(di, -1), di, count, frame.faceId.data() + at);
+        StorePartial(hn::Set(di, -1), di, count, frame.triangleId.data() + at);
+        if constexpr (kColor)
+          StorePartial(hn::Set(du32, backgroundBits), du32, count, reinterpret_cast<uint32_t*>(frame.color.data() + at));
+        continue;
+      }
+      if (count == N && first != 0 && hn::AllTrue(du, hn::Eq(idV, hn::Set(du, first)))) {
+        const SetupTriangle& t = bins.triangle(first);
         const V X = hn::Iota(d, double(x0 + int(k)) + 0.5);
         const V num = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthNum.a), X), hn::Set(d, t.depthNum.b * Y)),
                               hn::Set(d, t.depthNum.c));
@@ -354,7 +495,7 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, int x0, int y0, i
         hn::StoreU(hn::Set(di, int32_t(t.triangle)), di, frame.triangleId.data() + at);
         if constexpr (kColor) {
           uint32_t rgba;
-          const Rgba8 color = colorOf(ids[0], t);
+          const Rgba8 color = colorOf(first, t);
           std::memcpy(&rgba, &color, sizeof rgba);
           hn::StoreU(hn::Set(du32, rgba), du32, reinterpret_cast<uint32_t*>(frame.color.data() + at));
         }
@@ -362,12 +503,19 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, int x0, int y0, i
         continue;
       }
       for (size_t j = 0; j < count; ++j) {
-        if (!ids[j]) continue;
-        const SetupTriangle& t = bins.triangle(ids[j]);
+        const uint64_t key = uniform ? uniformKey : ids[j];
+        if (!key) {
+          frame.faceId[at + j] = -1;
+          frame.triangleId[at + j] = -1;
+          frame.depth[at + j] = std::numeric_limits<float>::infinity();
+          if constexpr (kColor) frame.color[at + j] = background;
+          continue;
+        }
+        const SetupTriangle& t = bins.triangle(key);
         frame.faceId[at + j] = int32_t(t.face);
         frame.triangleId[at + j] = int32_t(t.triangle);
         frame.depth[at + j] = float(t.eyeDepth(double(x0 + int(k + j)) + 0.5, Y));
-        if constexpr (kColor) frame.color[at + j] = colorOf(ids[j], t);
+        if constexpr (kColor) frame.color[at + j] = colorOf(key, t);
         ++covered;
       }
     }
@@ -375,15 +523,13 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, int x0, int y0, i
   return covered;
 }
 
-uint64_t ResolveTile(const TileJob& job, const TileScratch& s, FrameOutputs outputs, Frame& frame) {
-  const Bins& bins = *job.bins;
-  const int x0 = (job.tile % bins.tilesX) * kTileSize, y0 = (job.tile / bins.tilesX) * kTileSize;
-  const int w = std::min(kTileSize, bins.width - x0), h = std::min(kTileSize, bins.height - y0);
-  if (outputs == FrameOutputs::All) return ResolveIdsT<true>(job, s, x0, y0, w, h, frame);
-  if (outputs == FrameOutputs::IdsAndDepth) return ResolveIdsT<false>(job, s, x0, y0, w, h, frame);
+uint64_t ResolveTile(const TileJob& job, const TileScratch& s, FrameOutputs outputs, Rgba8 background, int rowBegin,
+                     int rowEnd, Frame& frame) {
+  if (outputs == FrameOutputs::All) return ResolveIdsT<true>(job, s, background, rowBegin, rowEnd, frame);
+  if (outputs == FrameOutputs::IdsAndDepth) return ResolveIdsT<false>(job, s, background, rowBegin, rowEnd, frame);
   uint64_t covered = 0;
   visitDepthFormat(job.depth.format, [&]<DepthStorage S, DepthMapping M>() {
-    covered = ResolveDepthT<S, M>(job, s, x0, y0, w, h, frame);
+    covered = ResolveDepthT<S, M>(job, s, rowBegin, rowEnd, frame);
   });
   return covered;
 }

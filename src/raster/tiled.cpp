@@ -18,6 +18,7 @@
 #include <limits>
 
 #include "core/depth_map.hpp"
+#include "raster/depth_bounds.hpp"
 #include "raster/edge.hpp"
 #include "raster/tiled.hpp"
 
@@ -50,60 +51,22 @@ void RasterCounters::add(const RasterCounters& o) {
   blocksFull += o.blocksFull;
   blocksCulled += o.blocksCulled;
   rowsCulled += o.rowsCulled;
+  tilesWhole += o.tilesWhole;
 }
 
 namespace {
 
-// A stored value that no fragment of `t` can be nearer than, for storage S and mapping M.
-//
-// Every covered pixel centre lies in the snapped triangle, and eye depth num/den (both planes
-// affine, den > 0) takes its extremes over it at the vertices; every mapping is monotone in eye
-// depth (nearer = smaller d), and so are the clamp and the rounding. So the nearest value is
-// the mapping of the smallest vertex depth — up to rounding, which is bounded and paid for
-// with margins: each plane's evaluation errs by at most a few ulps of |a||x| + |b||y| + |c|
-// (cancellation included), each mapping by a few ulps of its result. When those bounds are
-// not small (den near 0, a plane much steeper than its values), there is no bound: the
-// triangle is never rejected early.
+// A stored value that no fragment of `t` can be nearer than, for storage S and mapping M:
+// every covered pixel centre lies in the snapped triangle (raster/depth_bounds.hpp).
 template <DepthStorage S, DepthMapping M>
 double nearestStored(const SetupTriangle& t, const DepthSetup& depth) {
-  constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
-  constexpr double none = greater ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity();
-  constexpr double u = 0x1p-52;
-  double px[3], py[3], maxX = 0, maxY = 0;
+  double px[3], py[3];
   for (int i = 0; i < 3; ++i) {
     px[i] = double(t.x[i]) / double(kSubpixelOne);
     py[i] = double(t.y[i]) / double(kSubpixelOne);
-    maxX = std::max(maxX, std::abs(px[i]));
-    maxY = std::max(maxY, std::abs(py[i]));
   }
-  auto error = [&](const Plane& p) {  // absolute, of any evaluation over the triangle
-    return 4 * u * (std::abs(p.a) * maxX + std::abs(p.b) * maxY + std::abs(p.c));
-  };
-  const double numErr = error(t.depthNum), denErr = error(t.depthDen);
-  double num[3], den[3], numMin = std::numeric_limits<double>::infinity(), denMin = numMin;
-  for (int i = 0; i < 3; ++i) {
-    num[i] = t.depthNum.at(px[i], py[i]);
-    den[i] = t.depthDen.at(px[i], py[i]);
-    numMin = std::min(numMin, num[i]);
-    denMin = std::min(denMin, den[i]);
-  }
-  const double numLo = numMin - numErr, denLo = denMin - denErr;
-  if (!(numLo > 0 && denLo > 0)) return none;  // depth not bounded away from 0 (or NaN)
-  // 2 (numErr / numLo + denErr / denLo), with one division: this runs for every triangle.
-  const double relative = 2 * (numErr * denLo + denErr * numLo) / (numLo * denLo) + 1e-12;
-  if (!(relative < 1e-3)) return none;
-  // The vertex of smallest depth, compared without dividing (all terms positive); a wrong
-  // choice between nearly equal ratios is far inside the margin.
-  int nearest = 0;
-  for (int i = 1; i < 3; ++i)
-    if ((num[i] - numErr) * (den[nearest] + denErr) < (num[nearest] - numErr) * (den[i] + denErr)) nearest = i;
-  const double dNear = (num[nearest] - numErr) / (den[nearest] + denErr) * (1 - relative);
-  // Map, widen by the mapping's own rounding toward "nearer", and round as the storage does
-  // (monotone, in double so that out-of-range values stay ordered).
-  double v = mapDepth<M>(dNear, depth.near, depth.far, depth.orthographic);
-  v = greater ? v * (1 + 1e-12) : v * (1 - 1e-12);
-  if constexpr (S == DepthStorage::F32) return double(float(v));
-  else return std::floor(v * kDepthScale<S> + 0.5);
+  return storedRange<S, M, false>(t.depthNum, t.depthDen, px, py, 3, depth.near, depth.far, depth.orthographic)
+      .nearest;
 }
 
 // Appends (tile << 32 | index) for each tile triangle `index` may cover: the tiles its box
@@ -175,9 +138,10 @@ void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids
 }
 
 uint64_t resolveTile(const Bins& bins, int tile, const DepthSetup& depth, FrameOutputs outputs,
-                     const TriangleShader* shader, const TileScratch& scratch, Frame& frame) {
+                     const TriangleShader* shader, Rgba8 background, const TileScratch& scratch, Frame& frame,
+                     int rowBegin, int rowEnd) {
   const TileJob job{&bins, tile, depth, outputs != FrameOutputs::DepthOnly, nullptr, nullptr, shader};
-  return HWY_DYNAMIC_DISPATCH(ResolveTile)(job, scratch, outputs, frame);
+  return HWY_DYNAMIC_DISPATCH(ResolveTile)(job, scratch, outputs, background, rowBegin, rowEnd, frame);
 }
 
 const char* kernelTarget() { return HWY_DYNAMIC_DISPATCH(KernelTarget)(); }

@@ -87,18 +87,31 @@ struct RasterCounters {
   uint64_t blocksEmpty = 0, blocksPartial = 0, blocksFull = 0;
   uint64_t blocksCulled = 0;  // skipped: the triangle is behind everything stored in the block
   uint64_t rowsCulled = 0;    // SIMD rows of covered pixels skipped: nothing stored there is farther
+  uint64_t tilesWhole = 0;    // triangle-tile pairs applied as a whole-tile plane (every pixel won)
   void add(const RasterCounters& o);
 };
 
+/// What a tile's buffers mean. Clear and Plane are uniform states kept without touching the
+/// buffers: nothing drawn yet, or one triangle (`plane`) won every pixel of the tile (its values
+/// are the plane's, computed on demand bit for bit as the kernel would have stored them).
+/// Pixels: the buffers hold every pixel's value.
+enum class TileState : uint8_t { Clear, Plane, Pixels };
+
 /// A worker's tile: stored depth (as double: every format's values are exact in it) and the
 /// winning triangle (triangleKey, 0 = none), row-major kTileSize x kTileSize, plus the farthest
-/// stored value per block and per tile that reject triangles early. Reused tile after tile.
+/// stored value per block and per tile that reject triangles early, and the nearest stored
+/// value of the tile that lets a triangle in front of all of it replace it whole. Reused tile
+/// after tile.
 struct alignas(64) TileScratch {
   alignas(64) double depth[kTileSize * kTileSize];
   alignas(64) uint64_t triangle[kTileSize * kTileSize];
-  alignas(64) double blockFar[kBlocksPerTile];
-  double tileFar;
+  alignas(64) double blockFar[kBlocksPerTile];  // valid in state Pixels
+  double tileFar;   // no stored value is farther (conservative; stale while tileFarStale)
+  double tileNear;  // no stored value is nearer (conservative)
   bool tileFarStale;
+  TileState state;
+  const SetupTriangle* plane;  // state Plane: the triangle, and its key
+  uint64_t planeKey;
 };
 
 /// Binning, in two steps: prepareBins() sizes the bins for a width x height image and
@@ -113,12 +126,18 @@ void binChunk(Bins& bins, size_t chunk, const std::vector<SetupTriangle>& tris, 
 void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids, TileScratch& scratch,
                    RasterCounters& counters);
 
-/// Writes the tile of `scratch` into `frame` as `outputs` asks: ids, eye depth of the winning
-/// triangle's plane at the pixel centre (exactly as the reference resolves it), colour from
-/// `shader` (needed for FrameOutputs::All only); or, for DepthOnly, the eye depth of the stored
-/// value. Returns the number of covered pixels.
+/// Writes every pixel of the tile of `scratch` into `frame` as `outputs` asks: ids, eye depth
+/// of the winning triangle's plane at the pixel centre (exactly as the reference resolves it),
+/// colour from `shader` (needed for FrameOutputs::All only); or, for DepthOnly, the eye depth of
+/// the stored value; the background (-1, +inf, `background`) where nothing was drawn. The frame's
+/// buffers that `outputs` does not ask for are not touched. Only the tile's rows [rowBegin,
+/// rowEnd) (tile-local): a caller resolving several tiles writes the frame band by band across
+/// them — row-major frame buffers written one 64x64 tile at a time are 3-6x slower to write
+/// (64 rows x 4 buffers of scattered 256-byte pieces defeat the hardware prefetchers and TLB),
+/// measured on this project's 2-core VM. Returns the number of covered pixels.
 uint64_t resolveTile(const Bins& bins, int tile, const DepthSetup& depth, FrameOutputs outputs,
-                     const TriangleShader* shader, const TileScratch& scratch, Frame& frame);
+                     const TriangleShader* shader, Rgba8 background, const TileScratch& scratch, Frame& frame,
+                     int rowBegin = 0, int rowEnd = kTileSize);
 
 /// What the kernel (tile_kernel-inl.h) needs for one tile (scratch and counters: rasterizing only).
 struct TileJob {
