@@ -18,6 +18,7 @@
 #include "core/shading.hpp"
 #include "core/timer.hpp"
 #include "frontend/frontend.hpp"
+#include "raster/fragment_depth.hpp"
 #include "raster/halfspace.hpp"
 #include "raster/scanline.hpp"
 #include "raster/tiled.hpp"
@@ -46,8 +47,14 @@ void drawReference(const std::vector<SetupTriangle>& tris, const Camera& cam, co
   bufferBytes = zbuf.size() * sizeof(T) + triOf.size() * sizeof(uint32_t);
   for (uint32_t i = 0; i < tris.size(); ++i) {
     const SetupTriangle& t = tris[i];
+    const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, n0, f0, ortho);
     auto fragment = [&](int x, int y, double eyeDepth) {
-      const T z = quantizeDepth<S>(mapDepth<M>(eyeDepth, n0, f0, ortho));
+      // Half-space: the stored value from the pixel centre (raster/fragment_depth.hpp), which
+      // the tiled rasterizer reproduces bit for bit. Scanline (003): the eye depth it stepped
+      // along the span, mapped.
+      const T z = opt.raster == RasterKind::Scanline
+                      ? quantizeDepth<S>(mapDepth<M>(eyeDepth, n0, f0, ortho))
+                      : T(fragmentStored<S>(m, x + 0.5, m.p.b * (y + 0.5), m.q.b * (y + 0.5)));
       const size_t idx = size_t(y) * size_t(cam.width) + size_t(x);
       ++n.tests;
       if (greater ? z > zbuf[idx] : z < zbuf[idx]) {  // strictly nearer: ties keep the first

@@ -6,9 +6,10 @@
 // One vector holds up to 8 double lanes, one row of an 8x8 block (AVX-512: one vector per row,
 // AVX2: two, SSE4: four, scalar: eight). Every lane repeats the reference's arithmetic exactly:
 //  - coverage: the integer edge functions of raster/edge.hpp, exact in double (|E| < 2^50);
-//  - depth: ((a*X + b*Y) + c) per plane, their quotient, mapDepth<M>, std::clamp and
-//    quantizeDepth<S> — the same IEEE operations in the same order as zbuffer.cpp with
-//    halfspace.hpp, never fused (no MulAdd here; tiled.cpp is built with -ffp-contract=off);
+//  - depth: ((a*X + b*Y) + c) for the planes P and Q of raster/fragment_depth.hpp, their
+//    quotient, std::clamp and quantizeDepth<S> — the same IEEE operations in the same order as
+//    fragmentStored<S>, which the reference (zbuffer.cpp with halfspace.hpp) calls, never fused
+//    (no MulAdd here; tiled.cpp is built with -ffp-contract=off);
 //  - depth test: strictly nearer wins, so ties keep the triangle drawn first.
 // Hence stored values and winners are bit-identical to the scalar reference.
 
@@ -27,7 +28,7 @@
 #include <limits>
 
 #include "core/depth_map.hpp"
-#include "raster/depth_bounds.hpp"
+#include "raster/fragment_depth.hpp"
 #include "raster/edge.hpp"
 #include "raster/tiled.hpp"
 
@@ -48,22 +49,10 @@ HWY_INLINE Mask Nearer(V a, V b) {
   else return hn::Lt(a, b);
 }
 
-// mapDepth<M> (core/depth_map.hpp) lane by lane: same operations, same order, then std::clamp
-// (v < 0 ? 0 : 1 < v ? 1 : v, which keeps NaN and -0 as they are).
-template <DepthMapping M>
-HWY_INLINE V MapDepth(V d, V n, V f, V fMinusN, bool ortho) {
-  V v;
-  if constexpr (M == DepthMapping::Z) {
-    v = ortho ? hn::Div(hn::Sub(d, n), fMinusN) : hn::Div(hn::Mul(f, hn::Sub(d, n)), hn::Mul(fMinusN, d));
-  } else if constexpr (M == DepthMapping::Reversed) {
-    v = ortho ? hn::Div(hn::Sub(f, d), fMinusN) : hn::Div(hn::Mul(n, hn::Sub(f, d)), hn::Mul(fMinusN, d));
-  } else if constexpr (M == DepthMapping::Inv) {
-    v = hn::Div(n, d);
-  } else {
-    v = hn::Div(hn::Sub(d, n), fMinusN);
-  }
-  const D dd;
-  const V zero = hn::Zero(dd), one = hn::Set(dd, 1.0);
+// std::clamp(v, 0, 1) lane by lane (v < 0 ? 0 : 1 < v ? 1 : v, which keeps NaN and -0).
+HWY_INLINE V Clamp01(V v) {
+  const D d;
+  const V zero = hn::Zero(d), one = hn::Set(d, 1.0);
   return hn::IfThenElse(hn::Lt(v, zero), zero, hn::IfThenElse(hn::Lt(one, v), one, v));
 }
 
@@ -79,17 +68,15 @@ HWY_INLINE V Quantize(V v) {
   }
 }
 
-// Stored values of triangle t at the pixel centres X (lanes) of the row whose centre is Y,
-// exactly as the reference computes them: ((a X + b Y) + c) per plane, their quotient,
-// mapDepth<M> and quantizeDepth<S>.
-template <DepthStorage S, DepthMapping M>
-HWY_INLINE V StoredDepth(const SetupTriangle& t, V X, double Y, V nV, V fV, V fMinusNV, bool ortho) {
+// Stored values of a triangle's fragments at the pixel centres X (lanes) of the row whose
+// centre is Y, exactly as fragmentStored<S> (raster/fragment_depth.hpp) computes them:
+// ((a X + b Y) + c) for P and Q, their quotient, clamp and rounding to storage.
+template <DepthStorage S>
+HWY_INLINE V StoredDepth(const MappedPlanes& m, V X, double Y) {
   const D d;
-  const V num = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthNum.a), X), hn::Set(d, t.depthNum.b * Y)),
-                        hn::Set(d, t.depthNum.c));
-  const V den = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthDen.a), X), hn::Set(d, t.depthDen.b * Y)),
-                        hn::Set(d, t.depthDen.c));
-  return Quantize<S>(MapDepth<M>(hn::Div(num, den), nV, fV, fMinusNV, ortho));
+  const V p = hn::Add(hn::Add(hn::Mul(hn::Set(d, m.p.a), X), hn::Set(d, m.p.b * Y)), hn::Set(d, m.p.c));
+  const V q = hn::Add(hn::Add(hn::Mul(hn::Set(d, m.q.a), X), hn::Set(d, m.q.b * Y)), hn::Set(d, m.q.c));
+  return Quantize<S>(Clamp01(hn::Div(p, q)));
 }
 
 // The farther / nearer of two vectors of stored values, lane by lane.
@@ -149,9 +136,10 @@ void Materialize(const TileJob& job, const TileFrame& f) {
   const size_t N = hn::Lanes(d);
   TileScratch& s = *job.scratch;
   const bool plane = s.state == TileState::Plane;
-  const SetupTriangle* t = s.plane;
+  const MappedPlanes m = plane ? mapPlanes<M>(s.plane->depthNum, s.plane->depthDen, job.depth.near, job.depth.far,
+                                              job.depth.orthographic)
+                               : MappedPlanes{};
   const V clearV = hn::Set(d, f.clear), outside = hn::Set(d, f.nearestPossible), widthV = hn::Set(d, double(f.w));
-  const V nV = hn::Set(d, job.depth.near), fV = hn::Set(d, job.depth.far), fMinusNV = hn::Set(d, job.depth.far - job.depth.near);
   const auto keyV = hn::Set(du, plane ? s.planeKey : 0), zeroKey = hn::Zero(du);
   V tileFar = outside;
   for (int b = 0; b < kBlocksPerTile; ++b) {
@@ -165,9 +153,8 @@ void Materialize(const TileJob& job, const TileFrame& f) {
         if (y >= f.h) in = hn::FirstN(d, 0);
         V v = outside;
         if (!hn::AllFalse(d, in)) {
-          const V drawn = plane ? StoredDepth<S, M>(*t, hn::Add(col, hn::Set(d, double(f.x0) + 0.5)), double(f.y0 + y) + 0.5,
-                                                   nV, fV, fMinusNV, job.depth.orthographic)
-                                : clearV;
+          const V drawn =
+              plane ? StoredDepth<S>(m, hn::Add(col, hn::Set(d, double(f.x0) + 0.5)), double(f.y0 + y) + 0.5) : clearV;
           v = hn::IfThenElse(in, drawn, outside);
         }
         hn::Store(v, d, s.depth + at);
@@ -181,6 +168,9 @@ void Materialize(const TileJob& job, const TileFrame& f) {
   s.tileFarStale = false;
   s.state = TileState::Pixels;
 }
+
+// Triangles whose box in the tile has at most this many pixel centres take the scalar path.
+inline constexpr int kSmallPixels = 16;
 
 template <DepthStorage S, DepthMapping M, bool kIds>
 void RasterizeTileT(const TileJob& job) {
@@ -205,7 +195,6 @@ void RasterizeTileT(const TileJob& job) {
 
   const double n = job.depth.near, f = job.depth.far;
   const bool ortho = job.depth.orthographic;
-  const V nV = hn::Set(d, n), fV = hn::Set(d, f), fMinusNV = hn::Set(d, f - n);
   const V nearestV = hn::Set(d, tf.nearestPossible), farthestV = hn::Set(d, tf.farthestPossible);
   const V lane = hn::Iota(d, 0.0);
   // The tile's pixel centres (corners of the in-image part) for whole-tile tests and bounds.
@@ -213,6 +202,10 @@ void RasterizeTileT(const TileJob& job) {
   const int64_t cornerY[2] = {centerFixed(y0), centerFixed(y0 + h - 1)};
   const double rectX[4] = {x0 + 0.5, x0 + w - 0.5, x0 + w - 0.5, x0 + 0.5};
   const double rectY[4] = {y0 + 0.5, y0 + 0.5, y0 + h - 0.5, y0 + h - 0.5};
+  // Blocks written by the small-triangle path since their farthest values were computed (those
+  // values stay valid bounds meanwhile: writes only bring stored values nearer).
+  uint64_t dirtyBlocks = 0;
+  unsigned sinceRefresh = 0;
 
   for (size_t chunk = 0; chunk < bins.chunkCount; ++chunk) {
     const ChunkBins& cb = bins.chunks[chunk];
@@ -223,6 +216,21 @@ void RasterizeTileT(const TileJob& job) {
       // Early rejection: the triangle's nearest possible value is not nearer than the farthest
       // value stored in the tile, so none of its fragments can win here.
       const double qNear = cb.nearest[ti];
+      // Blocks small triangles wrote to: their farthest values, again, every 16 triangles (a
+      // stale value is still a valid bound: writes only bring stored values nearer).
+      if (dirtyBlocks && (++sinceRefresh & 15) == 0) {
+        for (uint64_t bits = dirtyBlocks; bits; bits &= bits - 1) {
+          const int b = hwy::Num0BitsBelowLS1Bit_Nonzero64(bits);
+          const size_t first = size_t(b / kBlocksX) * kBlockSize * kTileSize + size_t(b % kBlocksX) * kBlockSize;
+          V far = nearestV;
+          for (int y = 0; y < kBlockSize; ++y)
+            for (size_t k = 0; k < size_t(kBlockSize); k += N)
+              far = Farther<kGreater>(far, hn::Load(d, s.depth + first + size_t(y) * kTileSize + k));
+          s.blockFar[b] = FarthestLane<kGreater>(far);
+        }
+        dirtyBlocks = 0;
+        s.tileFarStale = true;
+      }
       if (s.tileFarStale) {  // the farthest of the blocks' farthest values
         V far = nearestV;
         for (size_t b = 0; b < size_t(kBlocksPerTile); b += N) far = Farther<kGreater>(far, hn::Load(d, s.blockFar + b));
@@ -234,6 +242,7 @@ void RasterizeTileT(const TileJob& job) {
         continue;
       }
       const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
+      const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, n, f, ortho);
 
       // Whole tile: the triangle covers every pixel centre of the tile (its four corner centres;
       // coverage is convex) and its farthest value is nearer than the nearest stored: it wins
@@ -243,7 +252,7 @@ void RasterizeTileT(const TileJob& job) {
         for (const Edge& edge : e)
           for (int c = 0; c < 4; ++c) covers &= edge.at(cornerX[c & 1], cornerY[c >> 1]) >= edge.bias;
         if (covers) {
-          const StoredRange r = storedRange<S, M>(t.depthNum, t.depthDen, rectX, rectY, 4, n, f, ortho);
+          const StoredRange r = storedRange<S, M>(m, rectX, rectY, 4);
           if (storedNearer<M>(r.farthest, s.tileNear)) {
             s.state = TileState::Plane;
             s.plane = &t;
@@ -251,6 +260,7 @@ void RasterizeTileT(const TileJob& job) {
             s.tileFar = r.farthest;
             s.tileNear = r.nearest;
             s.tileFarStale = false;
+            dirtyBlocks = 0;  // the pixel buffers are no longer the tile's values
             tests += uint64_t(w) * uint64_t(h);
             writes += uint64_t(w) * uint64_t(h);
             ++count.tilesWhole;
@@ -258,7 +268,10 @@ void RasterizeTileT(const TileJob& job) {
           }
         }
       }
-      if (s.state != TileState::Pixels) Materialize<S, M, kIds>(job, tf);
+      if (s.state != TileState::Pixels) {
+        Materialize<S, M, kIds>(job, tf);
+        dirtyBlocks = 0;
+      }
 
       // The triangle's pixel box within the tile, tile-local and inclusive.
       const int rx0 = std::max(t.minX - x0, 0), rx1 = std::min(t.maxX - x0, w - 1);
@@ -268,15 +281,47 @@ void RasterizeTileT(const TileJob& job) {
         laneE[i] = hn::Mul(lane, hn::Set(d, double(e[i].stepX())));  // lane j: j * stepX, exact
         biasV[i] = hn::Set(d, double(e[i].bias));
       }
+      const uint64_t key = triangleKey(chunk, ti);
+
+      // Small triangles (a box of at most kSmallPixels centres, most of a million-triangle
+      // mesh): pixel by pixel in scalar code, with the same operations as the lanes below.
+      if ((rx1 - rx0 + 1) * (ry1 - ry0 + 1) <= kSmallPixels) {
+        int64_t rowE[3];
+        for (int i = 0; i < 3; ++i) rowE[i] = e[i].at(centerFixed(x0 + rx0), centerFixed(y0 + ry0));
+        for (int y = ry0; y <= ry1; ++y) {
+          const double Y = double(y0 + y) + 0.5, pRow = m.p.b * Y, qRow = m.q.b * Y;
+          int64_t E[3] = {rowE[0], rowE[1], rowE[2]};
+          for (int x = rx0; x <= rx1; ++x) {
+            if (E[0] >= e[0].bias && E[1] >= e[1].bias && E[2] >= e[2].bias) {
+              const size_t at = size_t(y) * kTileSize + size_t(x);
+              const double stored = s.depth[at];
+              if (storedNearer<M>(qNear, stored)) {
+                const double z = fragmentStored<S>(m, double(x) + (double(x0) + 0.5), pRow, qRow);
+                ++tests;
+                if (storedNearer<M>(z, stored)) {
+                  ++writes;
+                  s.depth[at] = z;
+                  if constexpr (kIds) s.triangle[at] = key;
+                  dirtyBlocks |= uint64_t(1) << ((y / kBlockSize) * kBlocksX + x / kBlockSize);
+                  if (storedNearer<M>(z, s.tileNear)) s.tileNear = z;
+                }
+              }
+            }
+            for (int i = 0; i < 3; ++i) E[i] += e[i].stepX();
+          }
+          for (int i = 0; i < 3; ++i) rowE[i] += e[i].stepY();
+        }
+        continue;
+      }
+
       const V qNearV = hn::Set(d, qNear);
-      const auto idV = hn::Set(du, triangleKey(chunk, ti));
+      const auto idV = hn::Set(du, key);
       // A triangle parallel to the image plane has both planes constant (a = b = 0): a*X and
       // b*Y are zeros of a fixed sign, so every pixel computes the same bits as its first one.
       const bool constantDepth = t.depthNum.a == 0 && t.depthNum.b == 0 && t.depthDen.a == 0 && t.depthDen.b == 0;
+      const double Y0 = y0 + ry0 + 0.5;
       const V zConstant =
-          constantDepth
-              ? hn::Set(d, double(quantizeDepth<S>(mapDepth<M>(t.eyeDepth(x0 + rx0 + 0.5, y0 + ry0 + 0.5), n, f, ortho))))
-              : hn::Zero(d);
+          constantDepth ? hn::Set(d, fragmentStored<S>(m, x0 + rx0 + 0.5, m.p.b * Y0, m.q.b * Y0)) : hn::Zero(d);
       V nearestWritten = farthestV;
 
       for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
@@ -310,7 +355,7 @@ void RasterizeTileT(const TileJob& job) {
           for (int i = 0; i < 3; ++i) rowE[i] = e[i].at(centerFixed(x0 + bxPixel), centerFixed(y0 + cy0));
           // The block's farthest value after this triangle, gathered from the rows it visits.
           V far = nearestV;
-          bool wrote = false;
+          V wroteMask = hn::Zero(d);
           for (int y = cy0; y <= cy1; ++y) {
             const double Y = double(y0 + y) + 0.5;
             for (size_t k = 0; k < size_t(kBlockSize); k += N) {
@@ -325,34 +370,28 @@ void RasterizeTileT(const TileJob& job) {
                   cover = hn::And(cover, hn::Ge(edgeV, biasV[i]));
                 }
               // Only pixels where something farther than the triangle's nearest value is stored
-              // can change; the row is skipped when there are none.
+              // can change (counted as tested). The row is computed without branches either
+              // way: a mispredicted branch costs more than the division it would save.
               const Mask maybe = hn::And(cover, Nearer<kGreater>(qNearV, stored));
-              if (!hn::AllFalse(d, maybe)) {
-                // Pixel centres X = x + 0.5; depth = (a X + b Y + c) / (a' X + b' Y + c').
-                const V z = constantDepth ? zConstant
-                                          : StoredDepth<S, M>(t, hn::Add(col, hn::Set(d, double(x0) + 0.5)), Y, nV,
-                                                              fV, fMinusNV, ortho);
-                const Mask win = hn::And(maybe, Nearer<kGreater>(z, stored));
-                tests += hn::CountTrue(d, maybe);
-                if (!hn::AllFalse(d, win)) {
-                  writes += hn::CountTrue(d, win);
-                  result = hn::IfThenElse(win, z, stored);
-                  hn::Store(result, d, s.depth + at);
-                  if constexpr (kIds) {
-                    const auto old = hn::Load(du, s.triangle + at);
-                    hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
-                  }
-                  nearestWritten = NearerOf<kGreater>(nearestWritten, hn::IfThenElse(win, z, farthestV));
-                  wrote = true;
-                }
-              } else if (kCountBlocks && !hn::AllFalse(d, cover)) {
-                ++count.rowsCulled;
+              // Pixel centres X = x + 0.5; depth = P(X, Y) / Q(X, Y) (raster/fragment_depth.hpp).
+              const V z = constantDepth ? zConstant : StoredDepth<S>(m, hn::Add(col, hn::Set(d, double(x0) + 0.5)), Y);
+              const Mask win = hn::And(maybe, Nearer<kGreater>(z, stored));
+              tests += hn::CountTrue(d, maybe);
+              writes += hn::CountTrue(d, win);
+              result = hn::IfThenElse(win, z, stored);
+              hn::Store(result, d, s.depth + at);
+              if constexpr (kIds) {
+                const auto old = hn::Load(du, s.triangle + at);
+                hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
               }
+              nearestWritten = NearerOf<kGreater>(nearestWritten, hn::IfThenElse(win, z, farthestV));
+              wroteMask = hn::Or(wroteMask, hn::VecFromMask(d, win));
+              if constexpr (kCountBlocks) count.rowsCulled += hn::AllFalse(d, maybe) && !hn::AllFalse(d, cover);
               far = Farther<kGreater>(far, result);
             }
             for (int i = 0; i < 3; ++i) rowE[i] += e[i].stepY();
           }
-          if (wrote) {
+          if (!hn::AllFalse(d, hn::MaskFromVec(wroteMask))) {
             // The block's rows outside the triangle's box kept their values.
             for (int y = by * kBlockSize; y < (by + 1) * kBlockSize; ++y) {
               if (y == cy0) y = cy1 + 1;
@@ -413,8 +452,9 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
   const TileFrame tf = MakeTileFrame<S, M>(job);
   const V clearV = hn::Set(d, tf.clear);
   const V infinity = hn::Set(d, std::numeric_limits<double>::infinity());
-  const V nV = hn::Set(d, job.depth.near), fV = hn::Set(d, job.depth.far);
-  const V fMinusNV = hn::Set(d, job.depth.far - job.depth.near);
+  const MappedPlanes m = s.state == TileState::Plane ? mapPlanes<M>(s.plane->depthNum, s.plane->depthDen, job.depth.near,
+                                                                     job.depth.far, job.depth.orthographic)
+                                                      : MappedPlanes{};
   uint64_t covered = 0;
   for (int y = rowBegin; y < std::min(rowEnd, tf.h); ++y)
     for (size_t k = 0; k < size_t(tf.w); k += N) {
@@ -425,8 +465,7 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
         continue;
       }
       const V q = s.state == TileState::Plane
-                      ? StoredDepth<S, M>(*s.plane, hn::Iota(d, double(tf.x0 + int(k)) + 0.5), double(tf.y0 + y) + 0.5,
-                                          nV, fV, fMinusNV, job.depth.orthographic)
+                      ? StoredDepth<S>(m, hn::Iota(d, double(tf.x0 + int(k)) + 0.5), double(tf.y0 + y) + 0.5)
                       : hn::Load(d, s.depth + size_t(y) * kTileSize + k);
       const Mask drawn = hn::And(hn::FirstN(d, count), hn::Ne(q, clearV));
       covered += hn::CountTrue(d, drawn);

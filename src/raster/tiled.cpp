@@ -18,7 +18,7 @@
 #include <limits>
 
 #include "core/depth_map.hpp"
-#include "raster/depth_bounds.hpp"
+#include "raster/fragment_depth.hpp"
 #include "raster/edge.hpp"
 #include "raster/tiled.hpp"
 
@@ -57,7 +57,7 @@ void RasterCounters::add(const RasterCounters& o) {
 namespace {
 
 // A stored value that no fragment of `t` can be nearer than, for storage S and mapping M:
-// every covered pixel centre lies in the snapped triangle (raster/depth_bounds.hpp).
+// every covered pixel centre lies in the snapped triangle (raster/fragment_depth.hpp).
 template <DepthStorage S, DepthMapping M>
 double nearestStored(const SetupTriangle& t, const DepthSetup& depth) {
   double px[3], py[3];
@@ -65,8 +65,8 @@ double nearestStored(const SetupTriangle& t, const DepthSetup& depth) {
     px[i] = double(t.x[i]) / double(kSubpixelOne);
     py[i] = double(t.y[i]) / double(kSubpixelOne);
   }
-  return storedRange<S, M, false>(t.depthNum, t.depthDen, px, py, 3, depth.near, depth.far, depth.orthographic)
-      .nearest;
+  const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, depth.near, depth.far, depth.orthographic);
+  return storedRange<S, M>(m, px, py, 3).nearest;
 }
 
 // Appends (tile << 32 | index) for each tile triangle `index` may cover: the tiles its box

@@ -1,0 +1,127 @@
+// The stored depth of a fragment, and conservative bounds of it over a region. Shared by the
+// reference z-buffer (algorithms/zbuffer.cpp with --raster halfspace) and the tiled rasterizer
+// (raster/tiled.cpp, raster/tile_kernel-inl.h), so that both store the same bits.
+//
+// A fragment at pixel centre (X, Y) stores quantize(clamp(P(X, Y) / Q(X, Y), 0, 1)), where P
+// and Q are affine functions of the pixel position built once per triangle from its eye-depth
+// planes d = N / D (frontend.hpp: N = d/w, D = 1/w) and the depth mapping (mapPlanes below):
+// the mapping of document 002 written as one ratio, so a fragment costs one division, not the
+// two of mapDepth(N / D). Mathematically the same value; the rounding differs by a few ulps.
+// (The scanline rasterizer of 003 steps eye depth along a span instead and stores
+// quantize(mapDepth(d)): close to, not bit-identical with, this.)
+//
+// Bounds (storedRange): P / Q with Q > 0 is a linear-fractional function, monotone along every
+// line, so over a convex polygon its extremes are at the corners; the rasterizer evaluates P and
+// Q at pixel centres with an error of a few ulps of |a||x| + |b||y| + |c| each, and the ratio
+// with a relative ulp; clamp and rounding to storage are monotone. The bounds take the extreme
+// corner values, widened by those margins, as the tiled rasterizer's early rejection (a
+// triangle behind everything a tile holds is skipped) and its whole-tile planes (a triangle in
+// front of everything a tile holds replaces it at once) require. When Q is not bounded away
+// from 0 there is no bound: the result says "none" (the nearest possible value for `nearest`,
+// the farthest possible for `farthest`), which disables both.
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/depth_map.hpp"
+#include "frontend/frontend.hpp"
+
+namespace hsr {
+
+/// The mapped depth of a triangle's fragments: v(x, y) = p(x, y) / q(x, y), q > 0.
+struct MappedPlanes {
+  Plane p, q;
+};
+
+/// P and Q for mapping M (near n, far f): with d = N / D,
+///   z:        f (d - n) / ((f - n) d) = f (N - n D) / ((f - n) N)    (orthographic: linear)
+///   reversed: n (f - d) / ((f - n) d) = n (f D - N) / ((f - n) N)    (orthographic: (f D - N) / ((f - n) D))
+///   inv:      n / d                   = n D / N
+///   linear:   (d - n) / (f - n)       = (N - n D) / ((f - n) D)
+template <DepthMapping M>
+inline MappedPlanes mapPlanes(const Plane& N, const Plane& D, double n, double f, bool ortho) {
+  auto combine = [](double s, const Plane& a, double t, const Plane& b) {  // s a + t b
+    return Plane{s * a.a + t * b.a, s * a.b + t * b.b, s * a.c + t * b.c};
+  };
+  auto scale = [](double s, const Plane& a) { return Plane{s * a.a, s * a.b, s * a.c}; };
+  const double range = f - n;
+  if constexpr (M == DepthMapping::Z) {
+    if (!ortho) return {combine(f, N, -f * n, D), scale(range, N)};
+    return {combine(1, N, -n, D), scale(range, D)};
+  } else if constexpr (M == DepthMapping::Reversed) {
+    if (!ortho) return {combine(n * f, D, -n, N), scale(range, N)};
+    return {combine(f, D, -1, N), scale(range, D)};
+  } else if constexpr (M == DepthMapping::Inv) {
+    return {scale(n, D), N};
+  } else {
+    return {combine(1, N, -n, D), scale(range, D)};
+  }
+}
+
+/// The stored value (as double: exact for every storage) of the ratio p / q: clamped to [0, 1]
+/// as std::clamp does (NaN stays NaN), rounded as the storage does.
+template <DepthStorage S>
+inline double storedOfRatio(double p, double q) {
+  return double(quantizeDepth<S>(std::clamp(p / q, 0.0, 1.0)));
+}
+
+/// The stored value of the fragment at pixel centre (X, Y); `pRow` = m.p.b * Y and
+/// `qRow` = m.q.b * Y (computed once per row, as the SIMD kernel does).
+template <DepthStorage S>
+inline double fragmentStored(const MappedPlanes& m, double X, double pRow, double qRow) {
+  return storedOfRatio<S>((m.p.a * X + pRow) + m.p.c, (m.q.a * X + qRow) + m.q.c);
+}
+
+/// Stored values (as double) no fragment is nearer / farther than.
+struct StoredRange {
+  double nearest, farthest;
+};
+
+/// "a is strictly nearer than b" in the stored values of mapping M.
+template <DepthMapping M>
+inline bool storedNearer(double a, double b) {
+  if constexpr (M == DepthMapping::Reversed || M == DepthMapping::Inv) return a > b;
+  else return a < b;
+}
+
+/// Bounds over the convex polygon of `count` (<= 4) corners (px, py), in pixels.
+template <DepthStorage S, DepthMapping M>
+StoredRange storedRange(const MappedPlanes& m, const double* px, const double* py, int count) {
+  constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  constexpr StoredRange none{greater ? inf : -inf, greater ? -inf : inf};
+  constexpr double u = 0x1p-52;
+  double maxX = 0, maxY = 0;
+  for (int i = 0; i < count; ++i) {
+    maxX = std::max(maxX, std::abs(px[i]));
+    maxY = std::max(maxY, std::abs(py[i]));
+  }
+  // Any evaluation of a plane over the region errs by at most ~3 ulps of |a||x| + |b||y| + |c|
+  // (three roundings); a corner's computed value and a fragment's can differ by twice that.
+  auto error = [&](const Plane& p) { return 8 * u * (std::abs(p.a) * maxX + std::abs(p.b) * maxY + std::abs(p.c)); };
+  const double pErr = error(m.p), qErr = error(m.q);
+  double pMin = inf, pMax = -inf, qMin = inf, qMax = -inf;
+  for (int i = 0; i < count; ++i) {
+    const double p = m.p.at(px[i], py[i]), q = m.q.at(px[i], py[i]);
+    pMin = std::min(pMin, p);
+    pMax = std::max(pMax, p);
+    qMin = std::min(qMin, q);
+    qMax = std::max(qMax, q);
+  }
+  pMin -= pErr;
+  pMax += pErr;
+  qMin -= qErr;
+  qMax += qErr;
+  if (!(qMin > 0) || !std::isfinite(pMin) || !std::isfinite(pMax) || !std::isfinite(qMax)) return none;
+  // p / q over [pMin, pMax] x [qMin, qMax], q > 0; then room for the divisions' rounding.
+  double low = pMin >= 0 ? pMin / qMax : pMin / qMin;
+  double high = pMax >= 0 ? pMax / qMin : pMax / qMax;
+  low -= std::abs(low) * 1e-12;
+  high += std::abs(high) * 1e-12;
+  const double lowStored = double(quantizeDepth<S>(std::clamp(low, 0.0, 1.0)));
+  const double highStored = double(quantizeDepth<S>(std::clamp(high, 0.0, 1.0)));
+  return greater ? StoredRange{highStored, lowStored} : StoredRange{lowStored, highStored};
+}
+
+}  // namespace hsr
