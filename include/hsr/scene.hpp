@@ -24,6 +24,7 @@ struct MeshRange {
   std::string name;
   uint32_t firstFace = 0;
   uint32_t faceCount = 0;
+  Bounds3 bounds;  // of its faces' vertices; filled by Scene::finalize() (view culling per mesh)
 };
 
 /// What the loader or finalize() found wrong and how it was handled. Counted, never fatal:

@@ -53,16 +53,19 @@ int clipPolygon(HVertex* poly, int count, uint32_t planes, const Camera& cam, HV
   return count;
 }
 
-// Affine function through three (x, y, value) points.
-Plane planeThrough(const double* x, const double* y, const double* v) {
-  double x1 = x[1] - x[0], y1 = y[1] - y[0], x2 = x[2] - x[0], y2 = y[2] - y[0];
-  double v1 = v[1] - v[0], v2 = v[2] - v[0];
-  double det = x1 * y2 - x2 * y1;
-  Plane p;
-  p.a = (v1 * y2 - v2 * y1) / det;
-  p.b = (x1 * v2 - x2 * v1) / det;
-  p.c = v[0] - p.a * x[0] - p.b * y[0];
-  return p;
+// Affine functions through three (x, y, value) points, for two values at once (they share the
+// points, so one reciprocal of the determinant serves both).
+void planesThrough(const double* x, const double* y, const double* v, const double* w, Plane& pv, Plane& pw) {
+  const double x1 = x[1] - x[0], y1 = y[1] - y[0], x2 = x[2] - x[0], y2 = y[2] - y[0];
+  const double inv = 1.0 / (x1 * y2 - x2 * y1);
+  auto through = [&](const double* val, Plane& p) {
+    const double v1 = val[1] - val[0], v2 = val[2] - val[0];
+    p.a = (v1 * y2 - v2 * y1) * inv;
+    p.b = (x1 * v2 - x2 * v1) * inv;
+    p.c = val[0] - p.a * x[0] - p.b * y[0];
+  };
+  through(v, pv);
+  through(w, pw);
 }
 
 }  // namespace
@@ -136,8 +139,8 @@ bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, c
   // (nearly) degenerate and its plane would be ill-conditioned.
   const double exactArea = (ux[1] - ux[0]) * (uy[2] - uy[0]) - (uy[1] - uy[0]) * (ux[2] - ux[0]);
   const bool useExact = exactArea > 0.5 * double(std::abs(area)) / double(kSubpixelOne * kSubpixelOne);
-  t.depthNum = useExact ? planeThrough(ux, uy, num) : planeThrough(px, py, num);
-  t.depthDen = useExact ? planeThrough(ux, uy, den) : planeThrough(px, py, den);
+  if (useExact) planesThrough(ux, uy, num, den, t.depthNum, t.depthDen);
+  else planesThrough(px, py, num, den, t.depthNum, t.depthDen);
   t.triangle = triIndex;
   t.face = face;
   return true;
@@ -211,9 +214,7 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
   // is skipped without touching its triangles.
   out.faceVisible.assign(scene.faceCount(), 1);
   for (const MeshRange& mesh : scene.meshes) {
-    Bounds3 b;
-    for (uint32_t f = mesh.firstFace; f < mesh.firstFace + mesh.faceCount; ++f)
-      for (uint32_t vi : scene.face(f)) b.add(scene.positions[vi]);
+    const Bounds3& b = mesh.bounds;  // computed once, by Scene::finalize()
     if (b.empty()) continue;
     uint32_t all = (1u << kPlanes) - 1;
     for (int c = 0; c < 8; ++c) {

@@ -85,8 +85,9 @@ inline bool storedNearer(double a, double b) {
   else return a < b;
 }
 
-/// Bounds over the convex polygon of `count` (<= 4) corners (px, py), in pixels.
-template <DepthStorage S, DepthMapping M>
+/// Bounds over the convex polygon of `count` (<= 4) corners (px, py), in pixels. With
+/// kFarthest false only `nearest` is computed (`farthest` is "none"): one division less.
+template <DepthStorage S, DepthMapping M, bool kFarthest = true>
 StoredRange storedRange(const MappedPlanes& m, const double* px, const double* py, int count) {
   constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
   constexpr double inf = std::numeric_limits<double>::infinity();
@@ -115,13 +116,18 @@ StoredRange storedRange(const MappedPlanes& m, const double* px, const double* p
   qMax += qErr;
   if (!(qMin > 0) || !std::isfinite(pMin) || !std::isfinite(pMax) || !std::isfinite(qMax)) return none;
   // p / q over [pMin, pMax] x [qMin, qMax], q > 0; then room for the divisions' rounding.
-  double low = pMin >= 0 ? pMin / qMax : pMin / qMin;
-  double high = pMax >= 0 ? pMax / qMin : pMax / qMax;
-  low -= std::abs(low) * 1e-12;
-  high += std::abs(high) * 1e-12;
-  const double lowStored = double(quantizeDepth<S>(std::clamp(low, 0.0, 1.0)));
-  const double highStored = double(quantizeDepth<S>(std::clamp(high, 0.0, 1.0)));
-  return greater ? StoredRange{highStored, lowStored} : StoredRange{lowStored, highStored};
+  auto lowStored = [&] {
+    double low = pMin >= 0 ? pMin / qMax : pMin / qMin;
+    low -= std::abs(low) * 1e-12;
+    return double(quantizeDepth<S>(std::clamp(low, 0.0, 1.0)));
+  };
+  auto highStored = [&] {
+    double high = pMax >= 0 ? pMax / qMin : pMax / qMax;
+    high += std::abs(high) * 1e-12;
+    return double(quantizeDepth<S>(std::clamp(high, 0.0, 1.0)));
+  };
+  if constexpr (!kFarthest) return greater ? StoredRange{highStored(), none.farthest} : StoredRange{lowStored(), none.farthest};
+  return greater ? StoredRange{highStored(), lowStored()} : StoredRange{lowStored(), highStored()};
 }
 
 }  // namespace hsr

@@ -66,7 +66,7 @@ double nearestStored(const SetupTriangle& t, const DepthSetup& depth) {
     py[i] = double(t.y[i]) / double(kSubpixelOne);
   }
   const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, depth.near, depth.far, depth.orthographic);
-  return storedRange<S, M>(m, px, py, 3).nearest;
+  return storedRange<S, M, false>(m, px, py, 3).nearest;
 }
 
 // Appends (tile << 32 | index) for each tile triangle `index` may cover: the tiles its box

@@ -44,7 +44,7 @@ void Scene::addFace(std::span<const uint32_t> indices, Rgba8 color) {
 void Scene::beginMesh(std::string name) {
   uint32_t first = uint32_t(faceCount());
   if (!meshes.empty()) meshes.back().faceCount = first - meshes.back().firstFace;
-  meshes.push_back({std::move(name), first, 0});
+  meshes.push_back({std::move(name), first, 0, {}});
 }
 
 void Scene::finalize() {
@@ -104,7 +104,7 @@ void Scene::finalize() {
   // when none was begun), counts recomputed from the starts, empty ranges dropped.
   const uint32_t total = uint32_t(faceCount());
   if (meshes.empty() || meshes.front().firstFace != 0)
-    meshes.insert(meshes.begin(), MeshRange{std::filesystem::path(source).stem().string(), 0, 0});
+    meshes.insert(meshes.begin(), MeshRange{std::filesystem::path(source).stem().string(), 0, 0, {}});
   for (size_t m = 0; m < meshes.size(); ++m) {
     uint32_t end = m + 1 < meshes.size() ? meshes[m + 1].firstFace : total;
     if (end < meshes[m].firstFace || end > total)
@@ -112,6 +112,11 @@ void Scene::finalize() {
     meshes[m].faceCount = end - meshes[m].firstFace;
   }
   std::erase_if(meshes, [](const MeshRange& m) { return m.faceCount == 0; });
+  for (MeshRange& mesh : meshes) {
+    mesh.bounds = Bounds3{};
+    for (uint32_t f = mesh.firstFace; f < mesh.firstFace + mesh.faceCount; ++f)
+      for (uint32_t v : face(f)) mesh.bounds.add(positions[v]);
+  }
 }
 
 Bounds3 Scene::bounds() const {
