@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/parallel.hpp"
+#include "raster/edge.hpp"
 
 namespace hsr {
 namespace {
@@ -134,6 +135,23 @@ bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, c
   t.maxX = int16_t(boxX1);
   t.minY = int16_t(boxY0);
   t.maxY = int16_t(boxY1);
+  // A small box none of whose pixel centres the triangle covers: it draws nothing, so it is
+  // dropped here rather than planed, binned and rasterized (186,321 of the 1,003,520 triangles
+  // of the sphere at 1920x1080).
+  if ((boxX1 - boxX0 + 1) * (boxY1 - boxY0 + 1) <= 4) {
+    const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
+    bool covers = false;
+    for (int64_t y = boxY0; y <= boxY1; ++y)
+      for (int64_t x = boxX0; x <= boxX1; ++x) {
+        bool inside = true;
+        for (const Edge& edge : e) inside &= edge.at(centerFixed(int(x)), centerFixed(int(y))) >= edge.bias;
+        covers |= inside;
+      }
+    if (!covers) {
+      ++counters.empty;
+      return false;
+    }
+  }
   // Depth planes through the unsnapped positions: snapping decides coverage only, so depth stays
   // exact for the true triangle. Fall back to the snapped positions when the unsnapped triangle is
   // (nearly) degenerate and its plane would be ill-conditioned.

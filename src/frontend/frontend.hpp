@@ -62,11 +62,13 @@ struct ProjectedVertex {
 /// Why triangles were not drawn, counted per scene triangle or clipped piece.
 struct FrontEndCounters {
   uint64_t clipped = 0, culledBackface = 0, culledFrustum = 0, degenerate = 0;
+  uint64_t empty = 0;  // on screen, but covering no pixel centre (not in the statistics)
   void add(const FrontEndCounters& o) {
     clipped += o.clipped;
     culledBackface += o.culledBackface;
     culledFrustum += o.culledFrustum;
     degenerate += o.degenerate;
+    empty += o.empty;
   }
 };
 
