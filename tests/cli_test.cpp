@@ -195,7 +195,9 @@ TEST_F(CommandLine, BadUsageIsExitTwoWithOneLine) {
         "render builtin:cubes --size 64x", "render builtin:cubes --size 16385x8", "render builtin:cubes --threads -1",
         "render builtin:cubes --algorithm nonsense", "render builtin:cubes --cull sideways",
         "render builtin:cubes --eye 1,2", "render builtin:cubes --fov nan", "render builtin:cubes --background 1,2,300",
-        "render builtin:cubes --depth d.tiff", "render", "bench builtin:cubes --frames 0", "help nonsense", ""}) {
+        "render builtin:cubes --depth d.tiff", "render builtin:cubes --depth-only -o c.png",
+        "render builtin:cubes --depth-only --ids i.png", "render builtin:cubes --depth-only --verify", "render",
+        "bench builtin:cubes --frames 0", "help nonsense", ""}) {
     Result r = hsr(args);
     EXPECT_EQ(r.status, 2) << args << "\n" << r;
     EXPECT_TRUE(r.oneErrorLine()) << args << "\n" << r;

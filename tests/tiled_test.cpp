@@ -5,10 +5,13 @@
 // equal. On a mismatch the message names the pixel and a command that replays it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstring>
 #include <fmt/format.h>
 #include <hwy/targets.h>
+#include <memory>
 #include <random>
 #include <set>
 
@@ -301,6 +304,60 @@ TEST(Tiled, IdsAndDepthWithoutColour) {
   EXPECT_TRUE(ids.color.empty());
   EXPECT_EQ(full.triangleId, ids.triangleId);
   EXPECT_EQ(full.color.size(), full.depth.size());
+}
+
+// Whole-tile planes ("lossless compression"): a triangle covering a whole tile in front of
+// everything stored there replaces the tile in O(1). Layers drawn back to front do that on every
+// tile a layer's triangle covers whole; front to back only the first layer does (the others are
+// rejected). Counted by the kernel; the frames are identical to the reference (test above).
+TEST(Tiled, TrianglesInFrontOfAWholeTileReplaceIt) {
+  for (const char* order : {"back-to-front", "front-to-back"}) {
+    const Scene scene = loadScene(std::string("builtin:layers?n=10&order=") + order);
+    const Camera cam = resolveCamera(*scene.camera, 256, 192, scene.bounds());
+    FrontEndOutput fe;
+    runFrontEnd(scene, cam, RenderOptions{}, fe);
+    const tiled::DepthSetup depth{DepthFormat{}, cam.near, cam.far, cam.orthographic};
+    tiled::Bins bins;
+    tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
+    for (size_t c = 0; c < fe.chunkCount; ++c) tiled::binChunk(bins, c, fe.chunks[c].triangles, depth);
+    auto scratch = std::make_unique<tiled::TileScratch>();
+    tiled::RasterCounters counters;
+    int planeTiles = 0;
+    for (int tile = 0; tile < bins.tileCount(); ++tile) {
+      tiled::rasterizeTile(bins, tile, depth, true, *scratch, counters);
+      planeTiles += scratch->state == tiled::TileState::Plane;
+    }
+    const uint64_t layersWhole = counters.tilesWhole;
+    if (std::string(order) == "back-to-front") {
+      EXPECT_GE(layersWhole, uint64_t(10 * planeTiles)) << order;  // every layer, on each tile left whole
+      EXPECT_GT(planeTiles, 0) << order;
+    } else {
+      EXPECT_EQ(layersWhole, uint64_t(planeTiles)) << order;  // the first layer only
+      EXPECT_GE(counters.culledTiles, uint64_t(9 * planeTiles)) << order;
+    }
+  }
+}
+
+// render() into a Frame that holds an earlier, different image: every pixel is rewritten (the
+// frame is sized, not cleared), for every output kind.
+TEST(Tiled, ReusedFrameIsFullyOverwritten) {
+  const Scene full = loadScene("builtin:layers?n=3"), sparse = loadScene("builtin:cubes");
+  const Camera fullCam = resolveCamera(*full.camera, 150, 100, full.bounds());
+  const Camera sparseCam = resolveCamera(frameBounds(sparse.bounds()), 150, 100, sparse.bounds());
+  for (FrameOutputs outputs : {FrameOutputs::All, FrameOutputs::IdsAndDepth, FrameOutputs::DepthOnly}) {
+    RenderOptions o;
+    o.outputs = outputs;
+    o.background = Rgba8{10, 20, 30, 255};
+    Frame reused;
+    render(full, fullCam, o, reused);
+    render(sparse, sparseCam, o, reused);
+    const Frame fresh = render(sparse, sparseCam, o);
+    EXPECT_EQ(reused.faceId, fresh.faceId);
+    EXPECT_EQ(reused.triangleId, fresh.triangleId);
+    EXPECT_EQ(firstDifference(reused.depth, fresh.depth), -1);
+    EXPECT_EQ(firstDifference(reused.color, fresh.color), -1);
+    EXPECT_GT(std::count(fresh.depth.begin(), fresh.depth.end(), std::numeric_limits<float>::infinity()), 1000);
+  }
 }
 
 // Occlusion culling: layers drawn front to back are rejected tile by tile after the first, with
