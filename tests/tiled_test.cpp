@@ -331,6 +331,8 @@ TEST(Tiled, TrianglesInFrontOfAWholeTileReplaceIt) {
     if (std::string(order) == "back-to-front") {
       EXPECT_GE(layersWhole, uint64_t(10 * planeTiles)) << order;  // every layer, on each tile left whole
       EXPECT_GT(planeTiles, 0) << order;
+      // Tiles the layers' diagonal crosses: the blocks off the diagonal are replaced whole.
+      EXPECT_GT(counters.blocksWhole, uint64_t(10 * 8)) << order;
     } else {
       EXPECT_EQ(layersWhole, uint64_t(planeTiles)) << order;  // the first layer only
       EXPECT_GE(counters.culledTiles, uint64_t(9 * planeTiles)) << order;

@@ -141,10 +141,11 @@ void Materialize(const TileJob& job, const TileFrame& f) {
                                : MappedPlanes{};
   const V clearV = hn::Set(d, f.clear), outside = hn::Set(d, f.nearestPossible), widthV = hn::Set(d, double(f.w));
   const auto keyV = hn::Set(du, plane ? s.planeKey : 0), zeroKey = hn::Zero(du);
+  const V farthestV = hn::Set(d, f.farthestPossible);
   V tileFar = outside;
   for (int b = 0; b < kBlocksPerTile; ++b) {
     const int bx = (b % kBlocksX) * kBlockSize, by = (b / kBlocksX) * kBlockSize;
-    V far = outside;
+    V far = outside, near = farthestV;
     for (int y = by; y < by + kBlockSize; ++y)
       for (size_t k = 0; k < size_t(kBlockSize); k += N) {
         const size_t at = size_t(y) * kTileSize + size_t(bx) + k;
@@ -160,8 +161,11 @@ void Materialize(const TileJob& job, const TileFrame& f) {
         hn::Store(v, d, s.depth + at);
         if constexpr (kIds) hn::Store(hn::IfThenElse(hn::RebindMask(du, in), keyV, zeroKey), du, s.triangle + at);
         far = Farther<kGreater>(far, v);
+        near = NearerOf<kGreater>(near, hn::IfThenElse(in, v, farthestV));
       }
     s.blockFar[b] = FarthestLane<kGreater>(far);
+    s.blockNear[b] = NearestLane<kGreater>(near);
+    s.blockKey[b] = 0;
     tileFar = Farther<kGreater>(tileFar, far);
   }
   s.tileFar = FarthestLane<kGreater>(tileFar);
@@ -171,6 +175,35 @@ void Materialize(const TileJob& job, const TileFrame& f) {
 
 // Triangles whose box in the tile has at most this many pixel centres take the scalar path.
 inline constexpr int kSmallPixels = 16;
+
+// Writes block b's plane (state Pixels, blockKey[b] != 0) into the pixel buffers, as
+// Materialize does for a tile; its bounds stay as they are (still valid).
+template <DepthStorage S, DepthMapping M, bool kIds>
+void MaterializeBlock(const TileJob& job, const TileFrame& f, int b) {
+  constexpr int kBlocksX = kTileSize / kBlockSize;
+  const D d;
+  const DU du;
+  const size_t N = hn::Lanes(d);
+  TileScratch& s = *job.scratch;
+  const MappedPlanes m =
+      mapPlanes<M>(s.blockTriangle[b]->depthNum, s.blockTriangle[b]->depthDen, job.depth.near, job.depth.far,
+                   job.depth.orthographic);
+  const V outside = hn::Set(d, f.nearestPossible), widthV = hn::Set(d, double(f.w));
+  const auto keyV = hn::Set(du, s.blockKey[b]), zeroKey = hn::Zero(du);
+  const int bx = (b % kBlocksX) * kBlockSize, by = (b / kBlocksX) * kBlockSize;
+  for (int y = by; y < by + kBlockSize; ++y)
+    for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+      const size_t at = size_t(y) * kTileSize + size_t(bx) + k;
+      const V col = hn::Iota(d, double(bx + int(k)));
+      Mask in = hn::Lt(col, widthV);
+      if (y >= f.h) in = hn::FirstN(d, 0);
+      const V v = hn::IfThenElse(in, StoredDepth<S>(m, hn::Add(col, hn::Set(d, double(f.x0) + 0.5)), double(f.y0 + y) + 0.5),
+                                 outside);
+      hn::Store(v, d, s.depth + at);
+      if constexpr (kIds) hn::Store(hn::IfThenElse(hn::RebindMask(du, in), keyV, zeroKey), du, s.triangle + at);
+    }
+  s.blockKey[b] = 0;
+}
 
 template <DepthStorage S, DepthMapping M, bool kIds>
 void RasterizeTileT(const TileJob& job) {
@@ -286,6 +319,9 @@ void RasterizeTileT(const TileJob& job) {
       // Small triangles (a box of at most kSmallPixels centres, most of a million-triangle
       // mesh): pixel by pixel in scalar code, with the same operations as the lanes below.
       if ((rx1 - rx0 + 1) * (ry1 - ry0 + 1) <= kSmallPixels) {
+        for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
+          for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx)
+            if (s.blockKey[by * kBlocksX + bx]) MaterializeBlock<S, M, kIds>(job, tf, by * kBlocksX + bx);
         int64_t rowE[3];
         for (int i = 0; i < 3; ++i) rowE[i] = e[i].at(centerFixed(x0 + rx0), centerFixed(y0 + ry0));
         for (int y = ry0; y <= ry1; ++y) {
@@ -302,7 +338,9 @@ void RasterizeTileT(const TileJob& job) {
                   ++writes;
                   s.depth[at] = z;
                   if constexpr (kIds) s.triangle[at] = key;
-                  dirtyBlocks |= uint64_t(1) << ((y / kBlockSize) * kBlocksX + x / kBlockSize);
+                  const int b = (y / kBlockSize) * kBlocksX + x / kBlockSize;
+                  dirtyBlocks |= uint64_t(1) << b;
+                  if (storedNearer<M>(z, s.blockNear[b])) s.blockNear[b] = z;
                   if (storedNearer<M>(z, s.tileNear)) s.tileNear = z;
                 }
               }
@@ -322,7 +360,6 @@ void RasterizeTileT(const TileJob& job) {
       const double Y0 = y0 + ry0 + 0.5;
       const V zConstant =
           constantDepth ? hn::Set(d, fragmentStored<S>(m, x0 + rx0 + 0.5, m.p.b * Y0, m.q.b * Y0)) : hn::Zero(d);
-      V nearestWritten = farthestV;
 
       for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
         for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx) {
@@ -348,13 +385,38 @@ void RasterizeTileT(const TileJob& job) {
             continue;
           }
           if constexpr (kCountBlocks) ++(full ? count.blocksFull : count.blocksPartial);
+          // Whole block: a triangle parallel to the image plane (every fragment stores
+          // zConstant's bits) covering every pixel centre of the block (in the image), in front
+          // of everything stored there: the block becomes the triangle's plane, in O(1). (Sloped
+          // triangles would need storedRange per block: on the city that cost more than it saved.)
+          const int blockX1 = std::min(bx * kBlockSize + kBlockSize - 1, w - 1);
+          const int blockY1 = std::min(by * kBlockSize + kBlockSize - 1, h - 1);
+          if (constantDepth && full && cx0 == bx * kBlockSize && cy0 == by * kBlockSize && cx1 == blockX1 &&
+              cy1 == blockY1) {
+            const StoredRange r{hn::GetLane(zConstant), hn::GetLane(zConstant)};
+            if (storedNearer<M>(r.farthest, s.blockNear[b])) {
+              const uint64_t cells = uint64_t(cx1 - cx0 + 1) * uint64_t(cy1 - cy0 + 1);
+              tests += cells;
+              writes += cells;
+              ++count.blocksWhole;
+              s.blockKey[b] = key;
+              s.blockTriangle[b] = &t;
+              s.tileFarStale |= s.blockFar[b] == s.tileFar;
+              s.blockFar[b] = r.farthest;
+              s.blockNear[b] = r.nearest;
+              if (storedNearer<M>(r.nearest, s.tileNear)) s.tileNear = r.nearest;
+              dirtyBlocks &= ~(uint64_t(1) << b);  // its pixel buffers are no longer its values
+              continue;
+            }
+          }
+          if (s.blockKey[b]) MaterializeBlock<S, M, kIds>(job, tf, b);
 
           const int bxPixel = bx * kBlockSize;  // tile-local x of the block's first column
           const V colLo = hn::Set(d, double(cx0)), colHi = hn::Set(d, double(cx1));
           int64_t rowE[3];  // edge functions at the block's first column, current row
           for (int i = 0; i < 3; ++i) rowE[i] = e[i].at(centerFixed(x0 + bxPixel), centerFixed(y0 + cy0));
           // The block's farthest value after this triangle, gathered from the rows it visits.
-          V far = nearestV;
+          V far = nearestV, nearestWritten = farthestV;
           V wroteMask = hn::Zero(d);
           for (int y = cy0; y <= cy1; ++y) {
             const double Y = double(y0 + y) + 0.5;
@@ -402,10 +464,11 @@ void RasterizeTileT(const TileJob& job) {
             // The tile's farthest value can only move when the block that held it moved.
             s.tileFarStale |= s.blockFar[b] == s.tileFar;
             s.blockFar[b] = FarthestLane<kGreater>(far);
+            const double written = NearestLane<kGreater>(nearestWritten);
+            if (storedNearer<M>(written, s.blockNear[b])) s.blockNear[b] = written;
+            if (storedNearer<M>(written, s.tileNear)) s.tileNear = written;
           }
         }
-      const double written = NearestLane<kGreater>(nearestWritten);
-      if (storedNearer<M>(written, s.tileNear)) s.tileNear = written;
     }
   }
   count.depthTests = tests;
@@ -464,9 +527,16 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
         StorePartial(hn::DemoteTo(df, infinity), df, count, out);
         continue;
       }
-      const V q = s.state == TileState::Plane
-                      ? StoredDepth<S>(m, hn::Iota(d, double(tf.x0 + int(k)) + 0.5), double(tf.y0 + y) + 0.5)
-                      : hn::Load(d, s.depth + size_t(y) * kTileSize + k);
+      const int b = (y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize;  // lanes within one block
+      const V X = hn::Iota(d, double(tf.x0 + int(k)) + 0.5);
+      const double Y = double(tf.y0 + y) + 0.5;
+      V q;
+      if (s.state == TileState::Plane) q = StoredDepth<S>(m, X, Y);
+      else if (s.blockKey[b])
+        q = StoredDepth<S>(mapPlanes<M>(s.blockTriangle[b]->depthNum, s.blockTriangle[b]->depthDen, job.depth.near,
+                                        job.depth.far, job.depth.orthographic),
+                           X, Y);
+      else q = hn::Load(d, s.depth + size_t(y) * kTileSize + k);
       const Mask drawn = hn::And(hn::FirstN(d, count), hn::Ne(q, clearV));
       covered += hn::CountTrue(d, drawn);
       const V eye = hn::IfThenElse(drawn, EyeDepthOfStored<S, M>(q, job.depth), infinity);
@@ -503,13 +573,16 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
   };
   uint32_t backgroundBits;
   std::memcpy(&backgroundBits, &background, sizeof backgroundBits);
-  const uint64_t uniformKey = s.state == TileState::Plane ? s.planeKey : 0;
+  const uint64_t tileKey = s.state == TileState::Plane ? s.planeKey : 0;
   uint64_t covered = 0;
   for (int y = rowBegin; y < std::min(rowEnd, h); ++y) {
     const double Y = double(y0 + y) + 0.5;
     for (size_t k = 0; k < size_t(w); k += N) {
       const uint64_t* ids = s.triangle + size_t(y) * kTileSize + k;
-      const bool uniform = s.state != TileState::Pixels;
+      const uint64_t blockKey =
+          s.state == TileState::Pixels ? s.blockKey[(y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize] : 0;
+      const bool uniform = s.state != TileState::Pixels || blockKey != 0;
+      const uint64_t uniformKey = s.state == TileState::Pixels ? blockKey : tileKey;
       const auto idV = uniform ? hn::Set(du, uniformKey) : hn::Load(du, ids);
       const uint64_t first = uniform ? uniformKey : ids[0];
       const size_t count = std::min(N, size_t(w) - k);

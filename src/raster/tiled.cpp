@@ -52,6 +52,7 @@ void RasterCounters::add(const RasterCounters& o) {
   blocksCulled += o.blocksCulled;
   rowsCulled += o.rowsCulled;
   tilesWhole += o.tilesWhole;
+  blocksWhole += o.blocksWhole;
 }
 
 namespace {

@@ -88,6 +88,7 @@ struct RasterCounters {
   uint64_t blocksCulled = 0;  // skipped: the triangle is behind everything stored in the block
   uint64_t rowsCulled = 0;    // SIMD rows of covered pixels skipped: nothing stored there is farther
   uint64_t tilesWhole = 0;    // triangle-tile pairs applied as a whole-tile plane (every pixel won)
+  uint64_t blocksWhole = 0;   // triangle-block pairs applied as a whole-block plane
   void add(const RasterCounters& o);
 };
 
@@ -105,7 +106,13 @@ enum class TileState : uint8_t { Clear, Plane, Pixels };
 struct alignas(64) TileScratch {
   alignas(64) double depth[kTileSize * kTileSize];
   alignas(64) uint64_t triangle[kTileSize * kTileSize];
-  alignas(64) double blockFar[kBlocksPerTile];  // valid in state Pixels
+  alignas(64) double blockFar[kBlocksPerTile];   // valid in state Pixels: no value of the block is farther
+  alignas(64) double blockNear[kBlocksPerTile];  // ... nearer (conservative bounds, both)
+  // State Pixels, per block: a triangle that won every pixel of the block at once (its key, 0 =
+  // none): the block's values are that triangle's plane and its pixel buffers are stale — the
+  // same uniform state as a tile's Plane, one level down.
+  alignas(64) uint64_t blockKey[kBlocksPerTile];
+  const SetupTriangle* blockTriangle[kBlocksPerTile];
   double tileFar;   // no stored value is farther (conservative; stale while tileFarStale)
   double tileNear;  // no stored value is nearer (conservative)
   bool tileFarStale;
