@@ -123,87 +123,80 @@ TileFrame MakeTileFrame(const TileJob& job) {
   return f;
 }
 
-// Writes the tile's uniform state (cleared, or one triangle's plane over all of it) into its
-// pixel buffers, with the farthest value of each block, so that triangles can be drawn pixel by
-// pixel from here on. The plane's values are computed as the kernel computes every fragment,
-// so they are the bits drawing the triangle pixel by pixel would have stored.
+// Writes block b's cells: inside the image, the plane m's values when `plane` (else `value`),
+// with triangle key `key`; outside, the never-drawn value and key 0. Returns the farthest value
+// written and the nearest in-image one in `far` and `near`. The plane's values are computed as
+// the kernel computes every fragment, so they are the bits drawing the triangle would store.
 template <DepthStorage S, DepthMapping M, bool kIds>
-void Materialize(const TileJob& job, const TileFrame& f) {
+HWY_INLINE void FillBlock(TileScratch& s, const TileFrame& f, int b, bool plane, const MappedPlanes& m, double value,
+                          uint64_t key, double& farOut, double& nearOut) {
   constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
   constexpr int kBlocksX = kTileSize / kBlockSize;
   const D d;
   const DU du;
   const size_t N = hn::Lanes(d);
-  TileScratch& s = *job.scratch;
-  const bool plane = s.state == TileState::Plane;
-  const MappedPlanes m = plane ? mapPlanes<M>(s.plane->depthNum, s.plane->depthDen, job.depth.near, job.depth.far,
-                                              job.depth.orthographic)
-                               : MappedPlanes{};
-  const V clearV = hn::Set(d, f.clear), outside = hn::Set(d, f.nearestPossible), widthV = hn::Set(d, double(f.w));
-  const auto keyV = hn::Set(du, plane ? s.planeKey : 0), zeroKey = hn::Zero(du);
+  const V valueV = hn::Set(d, value), outside = hn::Set(d, f.nearestPossible), widthV = hn::Set(d, double(f.w));
   const V farthestV = hn::Set(d, f.farthestPossible);
-  V tileFar = outside;
-  for (int b = 0; b < kBlocksPerTile; ++b) {
-    const int bx = (b % kBlocksX) * kBlockSize, by = (b / kBlocksX) * kBlockSize;
-    V far = outside, near = farthestV;
-    for (int y = by; y < by + kBlockSize; ++y)
-      for (size_t k = 0; k < size_t(kBlockSize); k += N) {
-        const size_t at = size_t(y) * kTileSize + size_t(bx) + k;
-        const V col = hn::Iota(d, double(bx + int(k)));
-        Mask in = hn::Lt(col, widthV);
-        if (y >= f.h) in = hn::FirstN(d, 0);
-        V v = outside;
-        if (!hn::AllFalse(d, in)) {
-          const V drawn =
-              plane ? StoredDepth<S>(m, hn::Add(col, hn::Set(d, double(f.x0) + 0.5)), double(f.y0 + y) + 0.5) : clearV;
-          v = hn::IfThenElse(in, drawn, outside);
-        }
-        hn::Store(v, d, s.depth + at);
-        if constexpr (kIds) hn::Store(hn::IfThenElse(hn::RebindMask(du, in), keyV, zeroKey), du, s.triangle + at);
-        far = Farther<kGreater>(far, v);
-        near = NearerOf<kGreater>(near, hn::IfThenElse(in, v, farthestV));
-      }
-    s.blockFar[b] = FarthestLane<kGreater>(far);
-    s.blockNear[b] = NearestLane<kGreater>(near);
-    s.blockKey[b] = 0;
-    tileFar = Farther<kGreater>(tileFar, far);
-  }
-  s.tileFar = FarthestLane<kGreater>(tileFar);
-  s.tileFarStale = false;
-  s.state = TileState::Pixels;
-}
-
-// Triangles whose box in the tile has at most this many pixel centres take the scalar path.
-inline constexpr int kSmallPixels = 16;
-
-// Writes block b's plane (state Pixels, blockKey[b] != 0) into the pixel buffers, as
-// Materialize does for a tile; its bounds stay as they are (still valid).
-template <DepthStorage S, DepthMapping M, bool kIds>
-void MaterializeBlock(const TileJob& job, const TileFrame& f, int b) {
-  constexpr int kBlocksX = kTileSize / kBlockSize;
-  const D d;
-  const DU du;
-  const size_t N = hn::Lanes(d);
-  TileScratch& s = *job.scratch;
-  const MappedPlanes m =
-      mapPlanes<M>(s.blockTriangle[b]->depthNum, s.blockTriangle[b]->depthDen, job.depth.near, job.depth.far,
-                   job.depth.orthographic);
-  const V outside = hn::Set(d, f.nearestPossible), widthV = hn::Set(d, double(f.w));
-  const auto keyV = hn::Set(du, s.blockKey[b]), zeroKey = hn::Zero(du);
+  const auto keyV = hn::Set(du, key), zeroKey = hn::Zero(du);
   const int bx = (b % kBlocksX) * kBlockSize, by = (b / kBlocksX) * kBlockSize;
+  V far = outside, near = farthestV;
   for (int y = by; y < by + kBlockSize; ++y)
     for (size_t k = 0; k < size_t(kBlockSize); k += N) {
       const size_t at = size_t(y) * kTileSize + size_t(bx) + k;
       const V col = hn::Iota(d, double(bx + int(k)));
       Mask in = hn::Lt(col, widthV);
       if (y >= f.h) in = hn::FirstN(d, 0);
-      const V v = hn::IfThenElse(in, StoredDepth<S>(m, hn::Add(col, hn::Set(d, double(f.x0) + 0.5)), double(f.y0 + y) + 0.5),
-                                 outside);
+      V v = outside;
+      if (!hn::AllFalse(d, in)) {
+        const V drawn =
+            plane ? StoredDepth<S>(m, hn::Add(col, hn::Set(d, double(f.x0) + 0.5)), double(f.y0 + y) + 0.5) : valueV;
+        v = hn::IfThenElse(in, drawn, outside);
+      }
       hn::Store(v, d, s.depth + at);
       if constexpr (kIds) hn::Store(hn::IfThenElse(hn::RebindMask(du, in), keyV, zeroKey), du, s.triangle + at);
+      far = Farther<kGreater>(far, v);
+      near = NearerOf<kGreater>(near, hn::IfThenElse(in, v, farthestV));
     }
+  farOut = FarthestLane<kGreater>(far);
+  nearOut = NearestLane<kGreater>(near);
+}
+
+// Writes the tile's uniform state (cleared, or one triangle's plane over all of it) into its
+// pixel buffers, with the bounds of each block, so that triangles can be drawn pixel by pixel
+// from here on.
+template <DepthStorage S, DepthMapping M, bool kIds>
+void Materialize(const TileJob& job, const TileFrame& f) {
+  constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
+  TileScratch& s = *job.scratch;
+  const bool plane = s.state == TileState::Plane;
+  const MappedPlanes m = plane ? mapPlanes<M>(s.plane->depthNum, s.plane->depthDen, job.depth.near, job.depth.far,
+                                              job.depth.orthographic)
+                               : MappedPlanes{};
+  double tileFar = f.nearestPossible;
+  for (int b = 0; b < kBlocksPerTile; ++b) {
+    FillBlock<S, M, kIds>(s, f, b, plane, m, f.clear, plane ? s.planeKey : 0, s.blockFar[b], s.blockNear[b]);
+    s.blockKey[b] = 0;
+    if (kGreater ? s.blockFar[b] < tileFar : s.blockFar[b] > tileFar) tileFar = s.blockFar[b];
+  }
+  s.tileFar = tileFar;
+  s.tileFarStale = false;
+  s.state = TileState::Pixels;
+}
+
+// Writes block b's plane (state Pixels, blockKey[b] != 0) into the pixel buffers, as
+// Materialize does for a tile; its bounds stay as they are (still valid).
+template <DepthStorage S, DepthMapping M, bool kIds>
+void MaterializeBlock(const TileJob& job, const TileFrame& f, int b) {
+  TileScratch& s = *job.scratch;
+  const MappedPlanes m = mapPlanes<M>(s.blockTriangle[b]->depthNum, s.blockTriangle[b]->depthDen, job.depth.near,
+                                      job.depth.far, job.depth.orthographic);
+  double far, near;
+  FillBlock<S, M, kIds>(s, f, b, true, m, 0.0, s.blockKey[b], far, near);
   s.blockKey[b] = 0;
 }
+
+// Triangles whose box in the tile has at most this many pixel centres take the scalar path.
+inline constexpr int kSmallPixels = 16;
 
 template <DepthStorage S, DepthMapping M, bool kIds>
 void RasterizeTileT(const TileJob& job) {
