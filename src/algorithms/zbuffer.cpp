@@ -69,7 +69,7 @@ void drawReference(const std::vector<SetupTriangle>& tris, const Camera& cam, co
 
   // Resolve: face id, colour and exact eye depth (from the winning triangle's plane) per pixel;
   // depth only: the eye depth of the stored value. (Colour is that of the last fragment written,
-  // i.e. the winner's: shading it here, once, gives the same image.)
+  // i.e. the winner's: writing it here, once, gives the same image.)
   for (int y = 0; y < cam.height; ++y)
     for (int x = 0; x < cam.width; ++x) {
       const size_t idx = frame.index(x, y);
@@ -82,7 +82,7 @@ void drawReference(const std::vector<SetupTriangle>& tris, const Camera& cam, co
         frame.faceId[idx] = int32_t(t.face);
         frame.triangleId[idx] = int32_t(t.triangle);
         frame.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
-        if (color) frame.color[idx] = shade(t.triangle);
+        if (color) frame.color[idx] = t.frontFacing ? t.color : shade(t.triangle);  // as the front end would
       }
       ++n.covered;
     }
@@ -165,8 +165,8 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
   TiledState& state = callerState;
   FrontEndOutput referenceFe;
   const bool isTiled = opt.raster == RasterKind::Tiled;
+  const TriangleShader shade(scene, cam, opt.shading);  // back faces' colour, when they show
   FrontEndOutput& fe = isTiled ? state.fe : referenceFe;
-  const TriangleShader shade(scene, cam, opt.shading);
 
   if (isTiled) {
     // Each chunk is binned by the worker that set it up, while it is in that core's cache.

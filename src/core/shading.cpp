@@ -32,10 +32,12 @@ Rgba8 TriangleShader::operator()(uint32_t t) const {
   dvec3 n = glm::cross(b - a, c - a);
   dvec3 view = forward_;
   if (!orthographic_) {
-    dvec3 centroid{0.0};
+    // The ray to the centroid, scaled by the vertex count (the cosine ignores the scale, and
+    // this way it needs no division).
+    dvec3 sum{0.0};
     auto polygon = scene_.face(tri.face);
-    for (uint32_t v : polygon) centroid += scene_.positions[v] - a;
-    view = (a - eye_) + centroid / double(polygon.size());
+    for (uint32_t v : polygon) sum += scene_.positions[v] - a;
+    view = (a - eye_) * double(polygon.size()) + sum;
   }
   const double ln2 = glm::dot(n, n) * glm::dot(view, view);
   const double cosine = ln2 > 0 ? std::abs(glm::dot(n, view)) / std::sqrt(ln2) : 1.0;

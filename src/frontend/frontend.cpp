@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/parallel.hpp"
+#include "core/shading.hpp"
 #include "raster/edge.hpp"
 
 namespace hsr {
@@ -187,9 +188,13 @@ uint64_t FrontEndOutput::memoryBytes() const {
 namespace {
 
 // Sets up the triangles [begin, end) into `out` in order, clipping where needed.
-void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& options, const FrontEndOutput& fe,
-                size_t begin, size_t end, std::vector<SetupTriangle>& out, FrontEndCounters& counters) {
+// Colour is shaded here, for the triangles that survive set-up, while the scene's data for
+// them is in cache (the resolve would read it back in pixel order, scattered).
+void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& options, const TriangleShader& shade,
+                const FrontEndOutput& fe, size_t begin, size_t end, std::vector<SetupTriangle>& out,
+                FrontEndCounters& counters) {
   out.clear();
+  const bool color = options.outputs == FrameOutputs::All;
   HVertex poly[3 + kPlanes], scratch[3 + kPlanes];
   SetupTriangle st;
   for (size_t ti = begin; ti < end; ++ti) {
@@ -205,7 +210,10 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
     }
     if ((c0 | c1 | c2) == 0) {
       const ProjectedVertex p[3] = {fe.projected[tri.v[0]], fe.projected[tri.v[1]], fe.projected[tri.v[2]]};
-      if (setupTriangle(p, uint32_t(ti), tri.face, cam, options.cull, counters, st)) out.push_back(st);
+      if (setupTriangle(p, uint32_t(ti), tri.face, cam, options.cull, counters, st)) {
+        st.color = color && st.frontFacing ? shade(uint32_t(ti)) : Rgba8{};
+        out.push_back(st);
+      }
       continue;
     }
     ++counters.clipped;
@@ -214,9 +222,13 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
     poly[2] = fe.hv[tri.v[2]];
     const int n = clipPolygon(poly, 3, c0 | c1 | c2, cam, scratch);
     // The clipped polygon is convex: fan it. Every piece keeps the triangle's and face's index.
+    const Rgba8 pieceColor = color && n >= 3 ? shade(uint32_t(ti)) : Rgba8{};
     for (int i = 1; i + 1 < n; ++i) {
       HVertex piece[3] = {poly[0], poly[i], poly[i + 1]};
-      if (setupTriangle(piece, uint32_t(ti), tri.face, cam, options.cull, counters, st)) out.push_back(st);
+      if (setupTriangle(piece, uint32_t(ti), tri.face, cam, options.cull, counters, st)) {
+        st.color = pieceColor;
+        out.push_back(st);
+      }
     }
   }
 }
@@ -264,12 +276,13 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
   // Triangles in fixed chunks, each into its own list (read in chunk order, they are the
   // submission order), each handed to the consumer by the worker that set it up.
   const size_t nt = scene.triangles.size();
+  const TriangleShader shade(scene, cam, options.shading);
   out.chunkCount = (nt + kChunkTriangles - 1) / kChunkTriangles;
   if (out.chunks.size() < out.chunkCount) out.chunks.resize(out.chunkCount);
   parallelFor(0, out.chunkCount, threads, [&](size_t c) {
     FrontEndChunk& chunk = out.chunks[c];
     chunk.counters = FrontEndCounters{};
-    setupRange(scene, cam, options, out, c * kChunkTriangles, std::min(nt, (c + 1) * kChunkTriangles), chunk.triangles,
+    setupRange(scene, cam, options, shade, out, c * kChunkTriangles, std::min(nt, (c + 1) * kChunkTriangles), chunk.triangles,
                chunk.counters);
     if (consumer) consumer(c);
   });

@@ -34,8 +34,7 @@ struct Plane {
 
 /// A triangle ready to rasterize. Vertices are in fixed point (1/256 pixel), ordered so that the
 /// edge functions E_i are positive inside (see raster/edge.hpp); bounding box in whole pixels.
-/// 96 bytes: everything the rasterizers and the resolve read, nothing else (colour is shaded
-/// from `triangle` when a pixel is resolved, for the winners only).
+/// 96 bytes: everything the rasterizers and the resolve read.
 struct SetupTriangle {
   int32_t x[3], y[3];
   int16_t minX, minY, maxX, maxY;  // inclusive pixel range whose centres may be covered, in the image
@@ -43,6 +42,8 @@ struct SetupTriangle {
   uint32_t triangle;               // index into Scene::triangles
   uint32_t face;
   bool frontFacing;                // counter-clockwise as seen by the camera
+  Rgba8 color;  // shaded (core/shading.hpp) when the frame keeps colour and frontFacing (a
+                // back face is mostly hidden: the resolve shades the few that show)
 
   double eyeDepth(double px, double py) const { return depthNum.at(px, py) / depthDen.at(px, py); }
 };

@@ -554,10 +554,11 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
   const Bins& bins = *job.bins;
   const int x0 = (job.tile % bins.tilesX) * kTileSize, y0 = (job.tile / bins.tilesX) * kTileSize;
   const int w = std::min(kTileSize, bins.width - x0), h = std::min(kTileSize, bins.height - y0);
-  // Colour is shaded here, for winners only; neighbouring pixels mostly share their triangle.
+  // Colour: set up with front faces; back faces (mostly hidden) are shaded here when they show.
   uint64_t lastKey = 0;
   Rgba8 lastColor{};
   [[maybe_unused]] auto colorOf = [&](uint64_t key, const SetupTriangle& t) {
+    if (t.frontFacing) return t.color;
     if (key != lastKey) {
       lastKey = key;
       lastColor = (*job.shader)(t.triangle);

@@ -135,7 +135,8 @@ void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids
 
 /// Writes every pixel of the tile of `scratch` into `frame` as `outputs` asks: ids, eye depth
 /// of the winning triangle's plane at the pixel centre (exactly as the reference resolves it),
-/// colour from `shader` (needed for FrameOutputs::All only); or, for DepthOnly, the eye depth of
+/// its colour (SetupTriangle::color, or from `shader` for back faces; needed for
+/// FrameOutputs::All only); or, for DepthOnly, the eye depth of
 /// the stored value; the background (-1, +inf, `background`) where nothing was drawn. The frame's
 /// buffers that `outputs` does not ask for are not touched. Only the tile's rows [rowBegin,
 /// rowEnd) (tile-local): a caller resolving several tiles writes the frame band by band across
