@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <hwy/targets.h>
 #include <map>
 #include <random>
 
@@ -269,4 +272,66 @@ TEST(Raster, DepthIsPerspectiveCorrect) {
 }
 
 }  // namespace
+
+// The batched SIMD set-up gives bit for bit the scalar set-up's triangles and counts, on every
+// instruction set: random triangles of every size, degenerate ones, slivers, off-screen ones,
+// tiny ones covering no pixel centre, both cull modes.
+TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
+  std::mt19937_64 rng(77);
+  std::uniform_real_distribution<double> depthDist(0.6, 90);
+  std::vector<ProjectedVertex> vertices;
+  std::vector<uint32_t> index[3];
+  for (int i = 0; i < 3000; ++i) {
+    dvec2 p[3];
+    const int kind = i % 6;
+    for (int k = 0; k < 3; ++k) p[k] = {randomCoord(rng, -40, W + 40), randomCoord(rng, -40, H + 40)};
+    if (kind == 1) p[1] = p[0] + dvec2(0.3, 0.2), p[2] = p[0] + dvec2(-0.2, 0.4);  // tiny
+    if (kind == 2) p[2] = p[1];                                                 // degenerate
+    if (kind == 3) p[2] = p[0] + (p[1] - p[0]) * 0.5 + dvec2(0, 0.01);          // sliver
+    for (int k = 0; k < 3; ++k) {
+      const double z = depthDist(rng);
+      index[k].push_back(uint32_t(vertices.size()));
+      vertices.push_back(projectVertex({p[k].x * z, p[k].y * z, z, z}));
+    }
+  }
+  std::vector<uint32_t> tri(vertices.size() / 3), face(tri.size());
+  for (size_t i = 0; i < tri.size(); ++i) tri[i] = uint32_t(i), face[i] = uint32_t(7 * i);
+  const Camera cam = pixelCamera();
+  int targets = 0;
+  for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    ++targets;
+    for (Cull cull : {Cull::None, Cull::Back, Cull::Front}) {
+      FrontEndCounters scalarCounts, batchCounts;
+      std::vector<SetupTriangle> scalar, batch(tri.size());
+      for (size_t i = 0; i < tri.size(); ++i) {
+        const ProjectedVertex v[3] = {vertices[index[0][i]], vertices[index[1][i]], vertices[index[2][i]]};
+        SetupTriangle t;
+        if (setupTriangle(v, tri[i], face[i], cam, cull, scalarCounts, t)) scalar.push_back(t);
+      }
+      const uint32_t* vertex[3] = {index[0].data(), index[1].data(), index[2].data()};
+      batch.resize(setupBatch(vertices.data(), vertex, tri.data(), face.data(), tri.size(), cam, cull, batchCounts,
+                              batch.data()));
+      const std::string what = std::string(hwy::TargetName(target)) + " cull " + std::to_string(int(cull));
+      ASSERT_EQ(scalar.size(), batch.size()) << what;
+      for (size_t i = 0; i < scalar.size(); ++i) {
+        scalar[i].color = batch[i].color = Rgba8{};  // shaded by the caller
+        ASSERT_EQ(std::memcmp(&scalar[i], &batch[i], offsetof(SetupTriangle, frontFacing)), 0) << what << " " << i;
+        ASSERT_EQ(scalar[i].frontFacing, batch[i].frontFacing) << what << " " << i;
+      }
+      EXPECT_EQ(scalarCounts.degenerate, batchCounts.degenerate) << what;
+      EXPECT_EQ(scalarCounts.culledBackface, batchCounts.culledBackface) << what;
+      EXPECT_EQ(scalarCounts.culledFrustum, batchCounts.culledFrustum) << what;
+      EXPECT_EQ(scalarCounts.empty, batchCounts.empty) << what;
+      if (cull == Cull::None) {
+        EXPECT_GT(scalarCounts.degenerate, 100u);
+        EXPECT_GT(scalarCounts.empty, 10u);
+        EXPECT_GT(scalar.size(), 1000u);
+      }
+    }
+  }
+  hwy::SetSupportedTargetsForTest(0);
+  EXPECT_GE(targets, 2);
+}
+
 }  // namespace hsr

@@ -189,12 +189,28 @@ namespace {
 
 // Sets up the triangles [begin, end) into `out` in order, clipping where needed.
 // Colour is shaded here, for the triangles that survive set-up, while the scene's data for
-// them is in cache (the resolve would read it back in pixel order, scattered).
+// them is in cache (the resolve would read it back in pixel order, scattered). Triangles inside
+// the clip volume are set up in batches with SIMD (setupBatch); a clipped one flushes the batch
+// first, so the output stays in submission order.
 void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& options, const TriangleShader& shade,
                 const FrontEndOutput& fe, size_t begin, size_t end, std::vector<SetupTriangle>& out,
                 FrontEndCounters& counters) {
   out.clear();
   const bool color = options.outputs == FrameOutputs::All;
+  constexpr size_t kBatch = 64;
+  uint32_t batchVertex[3][kBatch], batchTriangle[kBatch], batchFace[kBatch];
+  SetupTriangle batchOut[kBatch];
+  size_t batched = 0;
+  auto flush = [&] {
+    const uint32_t* vertex[3] = {batchVertex[0], batchVertex[1], batchVertex[2]};
+    const size_t n = setupBatch(fe.projected.data(), vertex, batchTriangle, batchFace, batched, cam, options.cull,
+                                counters, batchOut);
+    for (size_t i = 0; i < n; ++i) {
+      batchOut[i].color = color && batchOut[i].frontFacing ? shade(batchOut[i].triangle) : Rgba8{};
+      out.push_back(batchOut[i]);
+    }
+    batched = 0;
+  };
   HVertex poly[3 + kPlanes], scratch[3 + kPlanes];
   SetupTriangle st;
   for (size_t ti = begin; ti < end; ++ti) {
@@ -209,13 +225,13 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
       continue;
     }
     if ((c0 | c1 | c2) == 0) {
-      const ProjectedVertex p[3] = {fe.projected[tri.v[0]], fe.projected[tri.v[1]], fe.projected[tri.v[2]]};
-      if (setupTriangle(p, uint32_t(ti), tri.face, cam, options.cull, counters, st)) {
-        st.color = color && st.frontFacing ? shade(uint32_t(ti)) : Rgba8{};
-        out.push_back(st);
-      }
+      for (int k = 0; k < 3; ++k) batchVertex[k][batched] = tri.v[k];
+      batchTriangle[batched] = uint32_t(ti);
+      batchFace[batched] = tri.face;
+      if (++batched == kBatch) flush();
       continue;
     }
+    if (batched) flush();
     ++counters.clipped;
     poly[0] = fe.hv[tri.v[0]];
     poly[1] = fe.hv[tri.v[1]];
@@ -231,6 +247,7 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
       }
     }
   }
+  if (batched) flush();
 }
 
 }  // namespace

@@ -123,6 +123,17 @@ bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, c
 bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, const Camera& cam, Cull cull,
                    FrontEndCounters& counters, SetupTriangle& t);
 
+/// Lanes of the batched set-up (at most; fewer on narrower instruction sets).
+inline constexpr size_t kSetupBatch = 8;
+
+/// setupTriangle() for `count` triangles inside the clip volume at once, with SIMD
+/// (frontend/setup_batch.cpp): triangle i has vertices projected[vertex[0..2][i]], scene index
+/// triIndex[i] and face face[i]. Writes the survivors to out[0, n), in order, and returns n;
+/// the SetupTriangles (colour aside) and counters are bit for bit those of setupTriangle().
+size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
+                  const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
+                  SetupTriangle* out);
+
 /// Runs the front end over all scene triangles, in order, on up to options.threads threads; the
 /// work is split into fixed chunks, so the output never depends on the thread count.
 /// `out` is reused across frames. `consumer`, when given, is called once per chunk (see

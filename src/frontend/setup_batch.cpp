@@ -1,0 +1,190 @@
+// Triangle set-up over batches of triangles with SIMD (Highway, dispatched at run time): the
+// same arithmetic as setupTriangle(const ProjectedVertex*, ...) in frontend.cpp, lane by lane —
+// every value of the set-up is an IEEE double operation in the same order (or an exact integer
+// in double: fixed-point coordinates are below 2^24, their products below 2^49), so a batch
+// produces bit for bit the SetupTriangles the scalar function does (tests/frontend_test.cpp).
+// Used by runFrontEnd() for the triangles inside the clip volume; clipped ones stay scalar.
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "frontend/setup_batch.cpp"
+#include <hwy/foreach_target.h>  // must come before highway.h
+
+#include <hwy/highway.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "frontend/frontend.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace hsr {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+using D = hn::CappedTag<double, kSetupBatch>;
+using V = hn::Vec<D>;
+using M = hn::Mask<D>;
+
+size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
+                  const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
+                  SetupTriangle* out) {
+  const D d;
+  const size_t N = hn::Lanes(d);
+  const hn::Rebind<int64_t, D> di;
+  size_t written = 0;
+  for (size_t first = 0; first < count; first += N) {
+    const size_t lanes = std::min(N, count - first);
+    // Gather each vertex's fields (ProjectedVertex: sx, sy, X, Y, num, den; 6 x 8 bytes).
+    HWY_ALIGN int64_t offset[3][kSetupBatch];
+    for (int k = 0; k < 3; ++k)
+      for (size_t j = 0; j < N; ++j)
+        offset[k][j] = int64_t(vertex[k][first + std::min(j, lanes - 1)]) * int64_t(sizeof(ProjectedVertex) / 8);
+    const double* base = reinterpret_cast<const double*>(projected);
+    const int64_t* baseI = reinterpret_cast<const int64_t*>(projected);
+    V sx[3], sy[3], X[3], Y[3], num[3], den[3];
+    for (int k = 0; k < 3; ++k) {
+      const auto idx = hn::Load(di, offset[k]);
+      sx[k] = hn::GatherIndex(d, base + 0, idx);
+      sy[k] = hn::GatherIndex(d, base + 1, idx);
+      X[k] = hn::ConvertTo(d, hn::GatherIndex(di, baseI + 2, idx));
+      Y[k] = hn::ConvertTo(d, hn::GatherIndex(di, baseI + 3, idx));
+      num[k] = hn::GatherIndex(d, base + 4, idx);
+      den[k] = hn::GatherIndex(d, base + 5, idx);
+    }
+    const V zero = hn::Zero(d);
+    // Twice the signed area on the snapped grid (exact).
+    const V area = hn::Sub(hn::Mul(hn::Sub(X[1], X[0]), hn::Sub(Y[2], Y[0])), hn::Mul(hn::Sub(Y[1], Y[0]), hn::Sub(X[2], X[0])));
+    const M degenerate = hn::Eq(area, zero);
+    const M front = hn::Lt(area, zero);
+    M culled = hn::FirstN(d, 0);
+    if (cull == Cull::Back) culled = hn::AndNot(front, hn::Not(degenerate));
+    if (cull == Cull::Front) culled = front;
+    culled = hn::AndNot(degenerate, culled);
+    // Vertex order making the edge functions positive inside: swap 1 and 2 when area < 0.
+    auto order = [&](V* a) {
+      const V a1 = hn::IfThenElse(front, a[2], a[1]), a2 = hn::IfThenElse(front, a[1], a[2]);
+      a[1] = a1;
+      a[2] = a2;
+    };
+    order(sx), order(sy), order(X), order(Y), order(num), order(den);
+    // Pixel box: x in [ceil((min - 1/2) / 1), floor((max - 1/2))] in pixels, in the image.
+    const V one = hn::Set(d, double(kSubpixelOne)), half = hn::Set(d, double(kSubpixelOne / 2));
+    const V minX = hn::Min(hn::Min(X[0], X[1]), X[2]), maxX = hn::Max(hn::Max(X[0], X[1]), X[2]);
+    const V minY = hn::Min(hn::Min(Y[0], Y[1]), Y[2]), maxY = hn::Max(hn::Max(Y[0], Y[1]), Y[2]);
+    const V inv256 = hn::Set(d, 1.0 / double(kSubpixelOne));
+    const V bx0 = hn::Max(zero, hn::Ceil(hn::Mul(hn::Sub(minX, half), inv256)));
+    const V bx1 = hn::Min(hn::Set(d, double(cam.width - 1)), hn::Floor(hn::Mul(hn::Sub(maxX, half), inv256)));
+    const V by0 = hn::Max(zero, hn::Ceil(hn::Mul(hn::Sub(minY, half), inv256)));
+    const V by1 = hn::Min(hn::Set(d, double(cam.height - 1)), hn::Floor(hn::Mul(hn::Sub(maxY, half), inv256)));
+    const M noBox = hn::Or(hn::Gt(bx0, bx1), hn::Gt(by0, by1));
+    const M offScreen = hn::Or(hn::Or(hn::Lt(maxX, zero), hn::Lt(maxY, zero)),
+                               hn::Or(hn::Gt(minX, hn::Mul(hn::Set(d, double(cam.width)), one)),
+                                      hn::Gt(minY, hn::Mul(hn::Set(d, double(cam.height)), one))));
+    // Small boxes (at most 4 centres): does the triangle cover any of them? The box's centres
+    // are at offsets (0..3, 0), (0, 1..3) and (1, 1) from its corner, those inside it count.
+    const V bw = hn::Add(hn::Sub(bx1, bx0), hn::Set(d, 1.0)), bh = hn::Add(hn::Sub(by1, by0), hn::Set(d, 1.0));
+    const M small = hn::AndNot(noBox, hn::Le(hn::Mul(bw, bh), hn::Set(d, 4.0)));
+    M covers = hn::FirstN(d, 0);
+    if (!hn::AllFalse(d, small)) {
+      V edx[3], edy[3], ebias[3];
+      for (int i = 0; i < 3; ++i) {
+        const int j = (i + 1) % 3;
+        edx[i] = hn::Sub(X[j], X[i]);
+        edy[i] = hn::Sub(Y[j], Y[i]);
+        const M topLeft = hn::Or(hn::Lt(edy[i], zero), hn::And(hn::Eq(edy[i], zero), hn::Gt(edx[i], zero)));
+        ebias[i] = hn::IfThenElseZero(hn::Not(topLeft), hn::Set(d, 1.0));
+      }
+      static constexpr int kOffsets[8][2] = {{0, 0}, {1, 0}, {2, 0}, {3, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}};
+      for (const auto& o : kOffsets) {
+        const V ox = hn::Set(d, double(o[0])), oy = hn::Set(d, double(o[1]));
+        M inside = hn::And(hn::Lt(ox, bw), hn::Lt(oy, bh));
+        const V px = hn::Add(hn::Mul(hn::Add(bx0, ox), one), half), py = hn::Add(hn::Mul(hn::Add(by0, oy), one), half);
+        for (int i = 0; i < 3; ++i) {
+          const V e = hn::Sub(hn::Mul(edx[i], hn::Sub(py, Y[i])), hn::Mul(edy[i], hn::Sub(px, X[i])));
+          inside = hn::And(inside, hn::Ge(e, ebias[i]));
+        }
+        covers = hn::Or(covers, inside);
+      }
+    }
+    const M empty = hn::AndNot(covers, small);
+    // Depth planes through the unsnapped positions unless that triangle is (nearly) degenerate.
+    const V exactArea = hn::Sub(hn::Mul(hn::Sub(sx[1], sx[0]), hn::Sub(sy[2], sy[0])),
+                                hn::Mul(hn::Sub(sy[1], sy[0]), hn::Sub(sx[2], sx[0])));
+    const M useExact =
+        hn::Gt(exactArea, hn::Div(hn::Mul(hn::Set(d, 0.5), hn::Abs(area)), hn::Set(d, double(kSubpixelOne * kSubpixelOne))));
+    V x[3], y[3];
+    for (int k = 0; k < 3; ++k) {
+      x[k] = hn::IfThenElse(useExact, sx[k], hn::Div(X[k], one));
+      y[k] = hn::IfThenElse(useExact, sy[k], hn::Div(Y[k], one));
+    }
+    const V x1 = hn::Sub(x[1], x[0]), y1 = hn::Sub(y[1], y[0]), x2 = hn::Sub(x[2], x[0]), y2 = hn::Sub(y[2], y[0]);
+    const V inv = hn::Div(hn::Set(d, 1.0), hn::Sub(hn::Mul(x1, y2), hn::Mul(x2, y1)));
+    auto through = [&](const V* val, V& a, V& b, V& c) {
+      const V v1 = hn::Sub(val[1], val[0]), v2 = hn::Sub(val[2], val[0]);
+      a = hn::Mul(hn::Sub(hn::Mul(v1, y2), hn::Mul(v2, y1)), inv);
+      b = hn::Mul(hn::Sub(hn::Mul(x1, v2), hn::Mul(x2, v1)), inv);
+      c = hn::Sub(hn::Sub(val[0], hn::Mul(a, x[0])), hn::Mul(b, y[0]));
+    };
+    V na, nb, nc, da, db, dc;
+    through(num, na, nb, nc);
+    through(den, da, db, dc);
+
+    // Back to one SetupTriangle per surviving lane, in order; reasons counted as the scalar
+    // function does (the first that applies).
+    HWY_ALIGN double lane[22][kSetupBatch];
+    const V fields[22] = {X[0], X[1], X[2], Y[0], Y[1], Y[2], bx0, bx1, by0, by1, na, nb, nc, da, db, dc,
+                          hn::VecFromMask(d, degenerate), hn::VecFromMask(d, culled), hn::VecFromMask(d, noBox),
+                          hn::VecFromMask(d, offScreen), hn::VecFromMask(d, empty), hn::VecFromMask(d, front)};
+    for (int f = 0; f < 22; ++f) hn::Store(fields[f], d, lane[f]);
+    auto flag = [&](int f, size_t j) { return lane[f][j] != 0; };
+    for (size_t j = 0; j < lanes; ++j) {
+      if (flag(16, j)) {
+        ++counters.degenerate;
+        continue;
+      }
+      if (flag(17, j)) {
+        ++counters.culledBackface;
+        continue;
+      }
+      if (flag(18, j)) {
+        if (flag(19, j)) ++counters.culledFrustum;
+        continue;
+      }
+      if (flag(20, j)) {
+        ++counters.empty;
+        continue;
+      }
+      SetupTriangle& t = out[written++];
+      for (int k = 0; k < 3; ++k) {
+        t.x[k] = int32_t(lane[k][j]);
+        t.y[k] = int32_t(lane[3 + k][j]);
+      }
+      t.minX = int16_t(lane[6][j]);
+      t.maxX = int16_t(lane[7][j]);
+      t.minY = int16_t(lane[8][j]);
+      t.maxY = int16_t(lane[9][j]);
+      t.depthNum = Plane{lane[10][j], lane[11][j], lane[12][j]};
+      t.depthDen = Plane{lane[13][j], lane[14][j], lane[15][j]};
+      t.triangle = triIndex[first + j];
+      t.face = face[first + j];
+      t.frontFacing = flag(21, j);
+    }
+  }
+  return written;
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace hsr
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace hsr {
+HWY_EXPORT(SetupBatch);
+
+size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
+                  const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
+                  SetupTriangle* out) {
+  return HWY_DYNAMIC_DISPATCH(SetupBatch)(projected, vertex, triIndex, face, count, cam, cull, counters, out);
+}
+}  // namespace hsr
+#endif
