@@ -98,6 +98,8 @@ void BM_RasterTiles(benchmark::State& state) {
   state.counters["blocks_partial"] = double(counters.blocksPartial);
   state.counters["blocks_culled"] = double(counters.blocksCulled);
   state.counters["rows_culled"] = double(counters.rowsCulled);
+  state.counters["tiles_whole"] = double(counters.tilesWhole);
+  state.counters["blocks_whole"] = double(counters.blocksWhole);
 }
 BENCHMARK(BM_RasterTiles)
     ->ArgsProduct({{0, 1, 3}, benchmark::CreateDenseRange(0, 15, 1)})

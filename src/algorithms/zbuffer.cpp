@@ -6,8 +6,10 @@
 //    a resolve pass then turns triangle ids into face ids and exact eye depths;
 //  - the default, tiled (raster/tiled.hpp): the same fragments, compared and stored with the
 //    same arithmetic, but binned into tiles that threads own whole, rasterized with SIMD, with
-//    early rejection of triangles behind a tile's or block's farthest stored depth, and colour,
-//    ids and depth resolved per tile. Bit-identical results and equal depth_writes.
+//    early rejection of triangles behind a tile's or block's farthest stored depth, whole tiles
+//    and blocks replaced at once by a triangle in front of all they hold, and colour, ids and
+//    depth resolved per tile into a frame that is never cleared separately. Bit-identical
+//    results and equal depth_writes.
 #include <atomic>
 #include <cmath>
 #include <limits>

@@ -1,19 +1,28 @@
 // The tiled (sort-middle) rasterizer behind the default z-buffer: prepareBins()/binChunk() sort
-// set-up triangles into per-tile lists in submission order, chunk by chunk, rasterizeTile() runs every triangle
-// of one tile through the SIMD kernel (raster/tile_kernel-inl.h) into a worker's tile-sized
-// depth and triangle buffers, resolveTile() writes that tile into the Frame. Plain functions
-// without threads: the z-buffer (algorithms/zbuffer.cpp) calls them via parallelFor, one owner
-// per tile, so no locks; per-tile counters are summed in tile order.
+// set-up triangles into per-tile lists in submission order, chunk by chunk (each chunk by the
+// worker that set it up); rasterizeTile() runs every triangle of one tile through the SIMD
+// kernel (raster/tile_kernel-inl.h) into a worker's tile-sized depth and triangle buffers;
+// resolveTile() writes (rows of) that tile into the Frame. Plain functions without threads: the
+// z-buffer (algorithms/zbuffer.cpp) calls them via parallelFor, one owner per tile, so no locks;
+// per-tile counters are summed in tile order.
 //
 // Exactness: the kernel evaluates coverage with the same integer edge functions and depth with
 // the same double operations in the same order as the reference (raster/halfspace.hpp +
-// zbuffer.cpp), so face ids and stored depths are bit-identical to it for any thread count.
+// raster/fragment_depth.hpp + zbuffer.cpp), so face ids and stored depths are bit-identical to
+// it for any thread count and instruction set.
+//
+// Uniform states ("lossless z-buffer compression", document 002): a tile starts cleared without
+// touching its buffers, and a triangle covering all of it in front of everything stored there
+// makes it that triangle's plane in O(1) (TileState); likewise an 8x8 block for a triangle
+// parallel to the image plane (TileScratch::blockKey). Values are computed from the plane, bit
+// for bit as the kernel would have stored them, when a triangle covers part of it or at resolve.
 //
 // Early rejection (the base for a hierarchical z-buffer): each tile and each 8x8 block keeps
-// its farthest stored value; a triangle whose conservative nearest value (Bins::nearest) is
-// not nearer is skipped for the tile, the block, or a SIMD row. Statistics it defines:
-// depth_tests = fragments whose depth was computed and compared (rejected ones are not);
-// culled_occlusion = triangle-tile pairs skipped whole. depth_writes is the reference's.
+// conservative farthest and nearest stored values; a triangle whose conservative nearest value
+// (ChunkBins::nearest) is not nearer than the farthest is skipped for the tile, the block, or
+// (counted only) a SIMD row. Statistics it defines: depth_tests = fragments whose depth was
+// computed and compared, plus the pixels of whole-tile/block replacements (rejected ones are
+// not); culled_occlusion = triangle-tile pairs skipped whole. depth_writes is the reference's.
 #pragma once
 #include <hsr/frame.hpp>
 #include <hsr/render.hpp>
