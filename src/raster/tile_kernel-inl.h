@@ -21,6 +21,7 @@
 #define HSR_RASTER_TILE_KERNEL_INL_H_
 #endif
 
+#include <hwy/cache_control.h>
 #include <hwy/highway.h>
 
 #include <algorithm>
@@ -239,6 +240,12 @@ void RasterizeTileT(const TileJob& job) {
     for (uint32_t item = cb.start[size_t(job.tile)], end = cb.start[size_t(job.tile) + 1]; item < end; ++item) {
       const uint32_t ti = cb.items[item];
       const SetupTriangle& t = tris[ti];
+      if (item + 2 < end) {  // the records are scattered over the chunk: fetch ahead
+        const SetupTriangle* ahead = tris + cb.items[item + 2];
+        hwy::Prefetch(ahead);
+        hwy::Prefetch(reinterpret_cast<const char*>(ahead) + 64);
+        hwy::Prefetch(cb.nearest.data() + cb.items[item + 2]);
+      }
       // Early rejection: the triangle's nearest possible value is not nearer than the farthest
       // value stored in the tile, so none of its fragments can win here.
       const double qNear = cb.nearest[ti];
