@@ -84,7 +84,7 @@ void drawReference(const std::vector<SetupTriangle>& tris, const Camera& cam, co
         frame.faceId[idx] = int32_t(t.face);
         frame.triangleId[idx] = int32_t(t.triangle);
         frame.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
-        if (color) frame.color[idx] = t.frontFacing ? t.color : shade(t.triangle);  // as the front end would
+        if (color) frame.color[idx] = triangleColor(t, shade);
       }
       ++n.covered;
     }

@@ -201,14 +201,15 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
   uint32_t batchVertex[3][kBatch], batchTriangle[kBatch], batchFace[kBatch];
   SetupTriangle batchOut[kBatch];
   size_t batched = 0;
+  auto keep = [&](SetupTriangle& t) {  // front faces shaded (see triangleColor)
+    t.color = color && t.frontFacing ? shade(t.triangle) : Rgba8{};
+    out.push_back(t);
+  };
   auto flush = [&] {
     const uint32_t* vertex[3] = {batchVertex[0], batchVertex[1], batchVertex[2]};
     const size_t n = setupBatch(fe.projected.data(), vertex, batchTriangle, batchFace, batched, cam, options.cull,
                                 counters, batchOut);
-    for (size_t i = 0; i < n; ++i) {
-      batchOut[i].color = color && batchOut[i].frontFacing ? shade(batchOut[i].triangle) : Rgba8{};
-      out.push_back(batchOut[i]);
-    }
+    for (size_t i = 0; i < n; ++i) keep(batchOut[i]);
     batched = 0;
   };
   HVertex poly[3 + kPlanes], scratch[3 + kPlanes];
@@ -238,13 +239,9 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
     poly[2] = fe.hv[tri.v[2]];
     const int n = clipPolygon(poly, 3, c0 | c1 | c2, cam, scratch);
     // The clipped polygon is convex: fan it. Every piece keeps the triangle's and face's index.
-    const Rgba8 pieceColor = color && n >= 3 ? shade(uint32_t(ti)) : Rgba8{};
     for (int i = 1; i + 1 < n; ++i) {
       HVertex piece[3] = {poly[0], poly[i], poly[i + 1]};
-      if (setupTriangle(piece, uint32_t(ti), tri.face, cam, options.cull, counters, st)) {
-        st.color = pieceColor;
-        out.push_back(st);
-      }
+      if (setupTriangle(piece, uint32_t(ti), tri.face, cam, options.cull, counters, st)) keep(st);
     }
   }
   if (batched) flush();

@@ -9,6 +9,8 @@
 #pragma once
 #include <hsr/render.hpp>
 
+#include "core/shading.hpp"
+
 #include <functional>
 #include <vector>
 
@@ -47,6 +49,12 @@ struct SetupTriangle {
 
   double eyeDepth(double px, double py) const { return depthNum.at(px, py) / depthDen.at(px, py); }
 };
+
+/// The colour of a set-up triangle, one rule for every rasterizer: the front end shades front
+/// faces (SetupTriangle::color); a back face, mostly hidden, is shaded only when it shows.
+inline Rgba8 triangleColor(const SetupTriangle& t, const TriangleShader& shade) {
+  return t.frontFacing ? t.color : shade(t.triangle);
+}
 
 /// Homogeneous pixel coordinates of a vertex: pixel = (hx / w, hy / w), eye depth d (w > 0).
 struct HVertex {

@@ -565,10 +565,9 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
   uint64_t lastKey = 0;
   Rgba8 lastColor{};
   [[maybe_unused]] auto colorOf = [&](uint64_t key, const SetupTriangle& t) {
-    if (t.frontFacing) return t.color;
     if (key != lastKey) {
       lastKey = key;
-      lastColor = (*job.shader)(t.triangle);
+      lastColor = triangleColor(t, *job.shader);
     }
     return lastColor;
   };
