@@ -33,7 +33,8 @@ const Prepared& prepared(const std::string& name) {
   p.scene = loadScene("builtin:" + name);
   p.camera = resolveCamera(p.scene.camera ? *p.scene.camera : frameBounds(p.scene.bounds()), kWidth, kHeight,
                            p.scene.bounds());
-  runFrontEnd(p.scene, p.camera, RenderOptions{}, p.fe);
+  const DepthSetup depth{DepthFormat{}, p.camera.near, p.camera.far, p.camera.orthographic};
+  runFrontEnd(p.scene, p.camera, RenderOptions{}, p.fe, {}, &depth);
   return p;
 }
 
@@ -44,9 +45,10 @@ const char* kFormats[] = {"u16:z", "u16:reversed", "u16:inv", "u16:linear", "u24
 
 void BM_FrontEnd(benchmark::State& state) {
   const Prepared& p = prepared(kScenes[state.range(0)]);
+  const DepthSetup depth{DepthFormat{}, p.camera.near, p.camera.far, p.camera.orthographic};
   FrontEndOutput fe;
   for (auto _ : state) {
-    runFrontEnd(p.scene, p.camera, RenderOptions{}, fe);
+    runFrontEnd(p.scene, p.camera, RenderOptions{}, fe, {}, &depth);
     benchmark::DoNotOptimize(fe.chunks.data());
   }
   state.SetLabel(kScenes[state.range(0)]);
@@ -55,18 +57,17 @@ void BM_FrontEnd(benchmark::State& state) {
 }
 BENCHMARK(BM_FrontEnd)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
-// Binning alone (nearest bounds and per-tile lists), chunk after chunk on one thread.
-void binAll(const Prepared& p, const tiled::DepthSetup& depth, tiled::Bins& bins) {
-  tiled::prepareBins(bins, kWidth, kHeight, p.fe.chunkCount);
-  for (size_t c = 0; c < p.fe.chunkCount; ++c) tiled::binChunk(bins, c, p.fe.chunks[c].triangles, depth);
+// Binning alone (per-tile lists of a front end's output), chunk after chunk on one thread.
+void binAll(const FrontEndOutput& fe, tiled::Bins& bins) {
+  tiled::prepareBins(bins, kWidth, kHeight, fe.chunkCount);
+  for (size_t c = 0; c < fe.chunkCount; ++c) tiled::binChunk(bins, c, fe.chunks[c]);
 }
 
 void BM_Bin(benchmark::State& state) {
   const Prepared& p = prepared(kScenes[state.range(0)]);
-  const tiled::DepthSetup depth{DepthFormat{}, p.camera.near, p.camera.far, p.camera.orthographic};
   tiled::Bins bins;
   for (auto _ : state) {
-    binAll(p, depth, bins);
+    binAll(p.fe, bins);
     benchmark::DoNotOptimize(bins.chunks.data());
   }
   size_t entries = 0;
@@ -79,10 +80,12 @@ BENCHMARK(BM_Bin)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 // The tile pass alone (no resolve), one thread, for scene range(0) and format range(1).
 void BM_RasterTiles(benchmark::State& state) {
   const Prepared& p = prepared(kScenes[state.range(0)]);
-  const tiled::DepthSetup depth{DepthFormat::parse(kFormats[state.range(1)]), p.camera.near, p.camera.far,
-                                p.camera.orthographic};
+  const DepthSetup depth{DepthFormat::parse(kFormats[state.range(1)]), p.camera.near, p.camera.far,
+                         p.camera.orthographic};
+  FrontEndOutput fe;  // the nearest bounds are the format's
+  runFrontEnd(p.scene, p.camera, RenderOptions{}, fe, {}, &depth);
   tiled::Bins bins;
-  binAll(p, depth, bins);
+  binAll(fe, bins);
   auto scratch = std::make_unique<tiled::TileScratch>();
   tiled::RasterCounters counters;
   for (auto _ : state) {

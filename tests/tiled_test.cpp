@@ -206,17 +206,17 @@ TEST(Tiled, IdenticalOnOddImageSizes) {
 TEST(Tiled, BinsAreInSubmissionOrderWhateverTheChunkOrder) {
   const Scene scene = loadScene("builtin:random?n=10000&size=0.4");
   const Camera cam = resolveCamera(frameBounds(scene.bounds()), 300, 200, scene.bounds());
+  const DepthSetup depth{DepthFormat{}, cam.near, cam.far, cam.orthographic};
   FrontEndOutput fe;
-  runFrontEnd(scene, cam, RenderOptions{}, fe);
+  runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
   ASSERT_GT(fe.chunkCount, 2u);
   ASSERT_GT(fe.triangleCount(), 8000u);
-  const tiled::DepthSetup depth{DepthFormat{}, cam.near, cam.far, cam.orthographic};
   auto binned = [&](bool reverse) {
     tiled::Bins bins;
     tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
     for (size_t i = 0; i < fe.chunkCount; ++i) {
       const size_t c = reverse ? fe.chunkCount - 1 - i : i;
-      tiled::binChunk(bins, c, fe.chunks[c].triangles, depth);
+      tiled::binChunk(bins, c, fe.chunks[c]);
     }
     // Per tile: (submission position, nearest) of each entry, in list order.
     std::vector<std::vector<std::pair<size_t, double>>> lists(size_t(bins.tileCount()));
@@ -225,7 +225,7 @@ TEST(Tiled, BinsAreInSubmissionOrderWhateverTheChunkOrder) {
       const tiled::ChunkBins& cb = bins.chunks[c];
       for (int t = 0; t < bins.tileCount(); ++t)
         for (uint32_t k = cb.start[size_t(t)]; k < cb.start[size_t(t) + 1]; ++k)
-          lists[size_t(t)].emplace_back(base + cb.items[k], cb.nearest[cb.items[k]]);
+          lists[size_t(t)].emplace_back(base + cb.items[k], bins.nearest[c][cb.items[k]]);
       base += fe.chunks[c].triangles.size();
     }
     return lists;
@@ -350,12 +350,12 @@ TEST(Tiled, TrianglesInFrontOfAWholeTileReplaceIt) {
   for (const char* order : {"back-to-front", "front-to-back"}) {
     const Scene scene = loadScene(std::string("builtin:layers?n=10&order=") + order);
     const Camera cam = resolveCamera(*scene.camera, 256, 192, scene.bounds());
+    const DepthSetup depth{DepthFormat{}, cam.near, cam.far, cam.orthographic};
     FrontEndOutput fe;
-    runFrontEnd(scene, cam, RenderOptions{}, fe);
-    const tiled::DepthSetup depth{DepthFormat{}, cam.near, cam.far, cam.orthographic};
+    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
     tiled::Bins bins;
     tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
-    for (size_t c = 0; c < fe.chunkCount; ++c) tiled::binChunk(bins, c, fe.chunks[c].triangles, depth);
+    for (size_t c = 0; c < fe.chunkCount; ++c) tiled::binChunk(bins, c, fe.chunks[c]);
     auto scratch = std::make_unique<tiled::TileScratch>();
     tiled::RasterCounters counters;
     int planeTiles = 0;

@@ -118,7 +118,7 @@ constexpr int kResolveBand = 8;
 // segment band by band across its tiles, so that the frame is written in long row pieces (see
 // tiled::resolveTile). Each tile has one owner, so no locks; counters are kept per tile and
 // summed in tile order.
-void drawTiled(const RenderOptions& opt, const tiled::DepthSetup& depth, const TriangleShader& shade, Frame& frame,
+void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const TriangleShader& shade, Frame& frame,
                TiledState& state, Counters& n, tiled::RasterCounters& total) {
   const int threads = resolveThreads(opt.threads);
   const tiled::Bins& bins = state.bins;
@@ -172,11 +172,10 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
 
   if (isTiled) {
     // Each chunk is binned by the worker that set it up, while it is in that core's cache.
-    const tiled::DepthSetup depth{opt.depthFormat, cam.near, cam.far, cam.orthographic};
+    const DepthSetup depth{opt.depthFormat, cam.near, cam.far, cam.orthographic};
     tiled::prepareBins(state.bins, cam.width, cam.height, (scene.triangles.size() + kChunkTriangles - 1) / kChunkTriangles);
-    runFrontEnd(scene, cam, opt, fe, [&](size_t chunk) {
-      tiled::binChunk(state.bins, chunk, fe.chunks[chunk].triangles, depth);
-    });
+    runFrontEnd(
+        scene, cam, opt, fe, [&](size_t chunk) { tiled::binChunk(state.bins, chunk, fe.chunks[chunk]); }, &depth);
     st.addTime("frontend", timer.lap());
     drawTiled(opt, depth, shade, frame, state, n, tiledCounters);
     st.addTime("raster", timer.lap());

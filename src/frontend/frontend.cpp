@@ -6,6 +6,7 @@
 #include "core/parallel.hpp"
 #include "core/shading.hpp"
 #include "raster/edge.hpp"
+#include "raster/fragment_depth.hpp"
 
 namespace hsr {
 namespace {
@@ -181,35 +182,40 @@ std::vector<SetupTriangle> FrontEndOutput::flatten() const {
 uint64_t FrontEndOutput::memoryBytes() const {
   uint64_t bytes = hv.capacity() * sizeof(HVertex) + outcodes.capacity() +
                    projected.capacity() * sizeof(ProjectedVertex) + faceVisible.capacity();
-  for (const auto& c : chunks) bytes += c.triangles.capacity() * sizeof(SetupTriangle);
+  for (const auto& c : chunks)
+    bytes += c.triangles.capacity() * sizeof(SetupTriangle) + c.nearest.capacity() * sizeof(double);
   return bytes;
 }
 
 namespace {
 
-// Sets up the triangles [begin, end) into `out` in order, clipping where needed.
+// Sets up the triangles [begin, end) into `out` in order, clipping where needed, with their
+// nearest bounds in `depth` (when given) in out.nearest.
 // Colour is shaded here, for the triangles that survive set-up, while the scene's data for
 // them is in cache (the resolve would read it back in pixel order, scattered). Triangles inside
 // the clip volume are set up in batches with SIMD (setupBatch); a clipped one flushes the batch
 // first, so the output stays in submission order.
 void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& options, const TriangleShader& shade,
-                const FrontEndOutput& fe, size_t begin, size_t end, std::vector<SetupTriangle>& out,
-                FrontEndCounters& counters) {
-  out.clear();
+                const FrontEndOutput& fe, const DepthSetup* depth, size_t begin, size_t end, FrontEndChunk& out) {
+  out.triangles.clear();
+  out.nearest.clear();
+  FrontEndCounters& counters = out.counters;
   const bool color = options.outputs == FrameOutputs::All;
   constexpr size_t kBatch = 64;
   uint32_t batchVertex[3][kBatch], batchTriangle[kBatch], batchFace[kBatch];
   SetupTriangle batchOut[kBatch];
+  double batchNearest[kBatch];
   size_t batched = 0;
-  auto keep = [&](SetupTriangle& t) {  // front faces shaded (see triangleColor)
+  auto keep = [&](SetupTriangle& t, double nearest) {  // front faces shaded (see triangleColor)
     t.color = color && t.frontFacing ? shade(t.triangle) : Rgba8{};
-    out.push_back(t);
+    out.triangles.push_back(t);
+    if (depth) out.nearest.push_back(nearest);
   };
   auto flush = [&] {
     const uint32_t* vertex[3] = {batchVertex[0], batchVertex[1], batchVertex[2]};
     const size_t n = setupBatch(fe.projected.data(), vertex, batchTriangle, batchFace, batched, cam, options.cull,
-                                counters, batchOut);
-    for (size_t i = 0; i < n; ++i) keep(batchOut[i]);
+                                counters, batchOut, depth, batchNearest);
+    for (size_t i = 0; i < n; ++i) keep(batchOut[i], batchNearest[i]);
     batched = 0;
   };
   HVertex poly[3 + kPlanes], scratch[3 + kPlanes];
@@ -241,7 +247,8 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
     // The clipped polygon is convex: fan it. Every piece keeps the triangle's and face's index.
     for (int i = 1; i + 1 < n; ++i) {
       HVertex piece[3] = {poly[0], poly[i], poly[i + 1]};
-      if (setupTriangle(piece, uint32_t(ti), tri.face, cam, options.cull, counters, st)) keep(st);
+      if (setupTriangle(piece, uint32_t(ti), tri.face, cam, options.cull, counters, st))
+        keep(st, depth ? nearestStored(st, *depth) : 0.0);
     }
   }
   if (batched) flush();
@@ -250,7 +257,7 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
 }  // namespace
 
 void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& options, FrontEndOutput& out,
-                 const ChunkConsumer& consumer) {
+                 const ChunkConsumer& consumer, const DepthSetup* nearestFor) {
   static_cast<FrontEndCounters&>(out) = FrontEndCounters{};
   const int threads = resolveThreads(options.threads);
 
@@ -296,8 +303,8 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
   parallelFor(0, out.chunkCount, threads, [&](size_t c) {
     FrontEndChunk& chunk = out.chunks[c];
     chunk.counters = FrontEndCounters{};
-    setupRange(scene, cam, options, shade, out, c * kChunkTriangles, std::min(nt, (c + 1) * kChunkTriangles), chunk.triangles,
-               chunk.counters);
+    setupRange(scene, cam, options, shade, out, nearestFor, c * kChunkTriangles, std::min(nt, (c + 1) * kChunkTriangles),
+               chunk);
     if (consumer) consumer(c);
   });
   for (size_t c = 0; c < out.chunkCount; ++c) out.add(out.chunks[c].counters);

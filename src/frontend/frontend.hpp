@@ -56,6 +56,13 @@ inline Rgba8 triangleColor(const SetupTriangle& t, const TriangleShader& shade) 
   return t.frontFacing ? t.color : shade(t.triangle);
 }
 
+/// The depth buffer a frame is drawn into: its format and the camera's clipping range.
+struct DepthSetup {
+  DepthFormat format;
+  double near = 0, far = 0;
+  bool orthographic = false;
+};
+
 /// Homogeneous pixel coordinates of a vertex: pixel = (hx / w, hy / w), eye depth d (w > 0).
 struct HVertex {
   double hx, hy, d, w;
@@ -89,6 +96,10 @@ inline constexpr size_t kChunkTriangles = 1 << 12;
 /// The set-up triangles of one chunk of scene triangles, in submission order.
 struct FrontEndChunk {
   std::vector<SetupTriangle> triangles;
+  /// With runFrontEnd's `nearestFor` only, one per triangle: a stored value of that depth setup
+  /// that none of the triangle's fragments is nearer than (nearestStored() in
+  /// raster/fragment_depth.hpp, bit for bit), for occlusion culling.
+  std::vector<double> nearest;
   FrontEndCounters counters;
 };
 
@@ -138,15 +149,17 @@ inline constexpr size_t kSetupBatch = 8;
 /// (frontend/setup_batch.cpp): triangle i has vertices projected[vertex[0..2][i]], scene index
 /// triIndex[i] and face face[i]. Writes the survivors to out[0, n), in order, and returns n;
 /// the SetupTriangles (colour aside) and counters are bit for bit those of setupTriangle().
+/// With `depth`, also nearest[0, n): nearestStored(out[i], *depth), bit for bit.
 size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
                   const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
-                  SetupTriangle* out);
+                  SetupTriangle* out, const DepthSetup* depth = nullptr, double* nearest = nullptr);
 
 /// Runs the front end over all scene triangles, in order, on up to options.threads threads; the
 /// work is split into fixed chunks, so the output never depends on the thread count.
 /// `out` is reused across frames. `consumer`, when given, is called once per chunk (see
-/// ChunkConsumer), before runFrontEnd returns.
+/// ChunkConsumer), before runFrontEnd returns. With `nearestFor`, every chunk's `nearest` holds
+/// the triangles' nearest bounds in that depth setup.
 void runFrontEnd(const Scene& scene, const Camera& camera, const RenderOptions& options, FrontEndOutput& out,
-                 const ChunkConsumer& consumer = {});
+                 const ChunkConsumer& consumer = {}, const DepthSetup* nearestFor = nullptr);
 
 }  // namespace hsr

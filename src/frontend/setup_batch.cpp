@@ -13,7 +13,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
+#include "core/depth_map.hpp"
 #include "frontend/frontend.hpp"
 
 HWY_BEFORE_NAMESPACE();
@@ -25,9 +27,101 @@ using D = hn::CappedTag<double, kSetupBatch>;
 using V = hn::Vec<D>;
 using M = hn::Mask<D>;
 
+// An affine function of pixel position per lane (Plane, lane by lane).
+struct PlaneV {
+  V a, b, c;
+};
+
+// s x + t y and s x, as mapPlanes' combine and scale compute them (raster/fragment_depth.hpp).
+HWY_INLINE PlaneV Combine(double s, const PlaneV& x, double t, const PlaneV& y) {
+  const D d;
+  const V sv = hn::Set(d, s), tv = hn::Set(d, t);
+  return {hn::Add(hn::Mul(sv, x.a), hn::Mul(tv, y.a)), hn::Add(hn::Mul(sv, x.b), hn::Mul(tv, y.b)),
+          hn::Add(hn::Mul(sv, x.c), hn::Mul(tv, y.c))};
+}
+HWY_INLINE PlaneV Scale(double s, const PlaneV& x) {
+  const D d;
+  const V sv = hn::Set(d, s);
+  return {hn::Mul(sv, x.a), hn::Mul(sv, x.b), hn::Mul(sv, x.c)};
+}
+
+// nearestStored() (raster/fragment_depth.hpp: mapPlanes, then storedRange<S, M, false> over the
+// snapped corners px, py) lane by lane, with the same IEEE operations in the same order, for the
+// depth setup's format chosen at run time.
+HWY_INLINE V NearestStored(const DepthSetup& depth, const PlaneV& N, const PlaneV& Dn, const V* px, const V* py) {
+  const D d;
+  const double n = depth.near, f = depth.far, range = f - n;
+  const bool ortho = depth.orthographic;
+  const DepthMapping mapping = depth.format.mapping;
+  PlaneV P, Q;
+  switch (mapping) {
+    case DepthMapping::Z:
+      P = ortho ? Combine(1, N, -n, Dn) : Combine(f, N, -f * n, Dn);
+      Q = Scale(range, ortho ? Dn : N);
+      break;
+    case DepthMapping::Reversed:
+      P = ortho ? Combine(f, Dn, -1, N) : Combine(n * f, Dn, -n, N);
+      Q = Scale(range, ortho ? Dn : N);
+      break;
+    case DepthMapping::Inv:
+      P = Scale(n, Dn);
+      Q = N;
+      break;
+    default:
+      P = Combine(1, N, -n, Dn);
+      Q = Scale(range, Dn);
+  }
+  const bool greater = mapping == DepthMapping::Reversed || mapping == DepthMapping::Inv;
+  const double inf = std::numeric_limits<double>::infinity();
+  V maxX = hn::Zero(d), maxY = hn::Zero(d);
+  for (int i = 0; i < 3; ++i) {
+    maxX = hn::IfThenElse(hn::Lt(maxX, hn::Abs(px[i])), hn::Abs(px[i]), maxX);
+    maxY = hn::IfThenElse(hn::Lt(maxY, hn::Abs(py[i])), hn::Abs(py[i]), maxY);
+  }
+  const V eightUlp = hn::Set(d, 8 * 0x1p-52);
+  auto error = [&](const PlaneV& p) {
+    return hn::Mul(eightUlp, hn::Add(hn::Add(hn::Mul(hn::Abs(p.a), maxX), hn::Mul(hn::Abs(p.b), maxY)), hn::Abs(p.c)));
+  };
+  const V pErr = error(P), qErr = error(Q);
+  V pMin = hn::Set(d, inf), pMax = hn::Set(d, -inf), qMin = pMin, qMax = pMax;
+  for (int i = 0; i < 3; ++i) {
+    const V p = hn::Add(hn::Add(hn::Mul(P.a, px[i]), hn::Mul(P.b, py[i])), P.c);
+    const V q = hn::Add(hn::Add(hn::Mul(Q.a, px[i]), hn::Mul(Q.b, py[i])), Q.c);
+    pMin = hn::IfThenElse(hn::Lt(p, pMin), p, pMin);  // std::min(pMin, p)
+    pMax = hn::IfThenElse(hn::Lt(pMax, p), p, pMax);  // std::max(pMax, p)
+    qMin = hn::IfThenElse(hn::Lt(q, qMin), q, qMin);
+    qMax = hn::IfThenElse(hn::Lt(qMax, q), q, qMax);
+  }
+  pMin = hn::Sub(pMin, pErr);
+  pMax = hn::Add(pMax, pErr);
+  qMin = hn::Sub(qMin, qErr);
+  qMax = hn::Add(qMax, qErr);
+  const M bounded = hn::And(hn::And(hn::Gt(qMin, hn::Zero(d)), hn::IsFinite(pMin)),
+                            hn::And(hn::IsFinite(pMax), hn::IsFinite(qMax)));
+  const V margin = hn::Set(d, 1e-12);
+  V v;
+  if (greater) {  // highStored: the largest value
+    v = hn::IfThenElse(hn::Ge(pMax, hn::Zero(d)), hn::Div(pMax, qMin), hn::Div(pMax, qMax));
+    v = hn::Add(v, hn::Mul(hn::Abs(v), margin));
+  } else {  // lowStored: the smallest
+    v = hn::IfThenElse(hn::Ge(pMin, hn::Zero(d)), hn::Div(pMin, qMax), hn::Div(pMin, qMin));
+    v = hn::Sub(v, hn::Mul(hn::Abs(v), margin));
+  }
+  // std::clamp(v, 0, 1), then quantizeDepth of the storage (as a double).
+  const V zero = hn::Zero(d), one = hn::Set(d, 1.0);
+  v = hn::IfThenElse(hn::Lt(v, zero), zero, hn::IfThenElse(hn::Lt(one, v), one, v));
+  switch (depth.format.storage) {
+    case DepthStorage::F32: v = hn::PromoteTo(d, hn::DemoteTo(hn::Rebind<float, D>(), v)); break;
+    case DepthStorage::U16: v = hn::Floor(hn::Add(hn::Mul(v, hn::Set(d, kDepthScale<DepthStorage::U16>)), hn::Set(d, 0.5))); break;
+    case DepthStorage::U24: v = hn::Floor(hn::Add(hn::Mul(v, hn::Set(d, kDepthScale<DepthStorage::U24>)), hn::Set(d, 0.5))); break;
+    case DepthStorage::U32: v = hn::Floor(hn::Add(hn::Mul(v, hn::Set(d, kDepthScale<DepthStorage::U32>)), hn::Set(d, 0.5))); break;
+  }
+  return hn::IfThenElse(bounded, v, hn::Set(d, greater ? inf : -inf));
+}
+
 size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
                   const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
-                  SetupTriangle* out) {
+                  SetupTriangle* out, const DepthSetup* depth, double* nearest) {
   const D d;
   const size_t N = hn::Lanes(d);
   const hn::Rebind<int64_t, D> di;
@@ -110,12 +204,18 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     // Depth planes through the unsnapped positions unless that triangle is (nearly) degenerate.
     const V exactArea = hn::Sub(hn::Mul(hn::Sub(sx[1], sx[0]), hn::Sub(sy[2], sy[0])),
                                 hn::Mul(hn::Sub(sy[1], sy[0]), hn::Sub(sx[2], sx[0])));
-    const M useExact =
-        hn::Gt(exactArea, hn::Div(hn::Mul(hn::Set(d, 0.5), hn::Abs(area)), hn::Set(d, double(kSubpixelOne * kSubpixelOne))));
+    // (Divisions by powers of two are multiplications by their exact reciprocals: same bits.)
+    const M useExact = hn::Gt(exactArea, hn::Mul(hn::Mul(hn::Set(d, 0.5), hn::Abs(area)),
+                                                 hn::Set(d, 1.0 / double(kSubpixelOne * kSubpixelOne))));
+    V px[3], py[3];  // the snapped corners in pixels
+    for (int k = 0; k < 3; ++k) {
+      px[k] = hn::Mul(X[k], inv256);
+      py[k] = hn::Mul(Y[k], inv256);
+    }
     V x[3], y[3];
     for (int k = 0; k < 3; ++k) {
-      x[k] = hn::IfThenElse(useExact, sx[k], hn::Div(X[k], one));
-      y[k] = hn::IfThenElse(useExact, sy[k], hn::Div(Y[k], one));
+      x[k] = hn::IfThenElse(useExact, sx[k], px[k]);
+      y[k] = hn::IfThenElse(useExact, sy[k], py[k]);
     }
     const V x1 = hn::Sub(x[1], x[0]), y1 = hn::Sub(y[1], y[0]), x2 = hn::Sub(x[2], x[0]), y2 = hn::Sub(y[2], y[0]);
     const V inv = hn::Div(hn::Set(d, 1.0), hn::Sub(hn::Mul(x1, y2), hn::Mul(x2, y1)));
@@ -131,11 +231,12 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
 
     // Back to one SetupTriangle per surviving lane, in order; reasons counted as the scalar
     // function does (the first that applies).
-    HWY_ALIGN double lane[22][kSetupBatch];
-    const V fields[22] = {X[0], X[1], X[2], Y[0], Y[1], Y[2], bx0, bx1, by0, by1, na, nb, nc, da, db, dc,
+    const V nearestV = depth ? NearestStored(*depth, {na, nb, nc}, {da, db, dc}, px, py) : zero;
+    HWY_ALIGN double lane[23][kSetupBatch];
+    const V fields[23] = {X[0], X[1], X[2], Y[0], Y[1], Y[2], bx0, bx1, by0, by1, na, nb, nc, da, db, dc,
                           hn::VecFromMask(d, degenerate), hn::VecFromMask(d, culled), hn::VecFromMask(d, noBox),
-                          hn::VecFromMask(d, offScreen), hn::VecFromMask(d, empty), hn::VecFromMask(d, front)};
-    for (int f = 0; f < 22; ++f) hn::Store(fields[f], d, lane[f]);
+                          hn::VecFromMask(d, offScreen), hn::VecFromMask(d, empty), hn::VecFromMask(d, front), nearestV};
+    for (int f = 0; f < 23; ++f) hn::Store(fields[f], d, lane[f]);
     auto flag = [&](int f, size_t j) { return lane[f][j] != 0; };
     for (size_t j = 0; j < lanes; ++j) {
       if (flag(16, j)) {
@@ -154,6 +255,7 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
         ++counters.empty;
         continue;
       }
+      if (depth) nearest[written] = lane[22][j];
       SetupTriangle& t = out[written++];
       for (int k = 0; k < 3; ++k) {
         t.x[k] = int32_t(lane[k][j]);
@@ -183,8 +285,9 @@ HWY_EXPORT(SetupBatch);
 
 size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
                   const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
-                  SetupTriangle* out) {
-  return HWY_DYNAMIC_DISPATCH(SetupBatch)(projected, vertex, triIndex, face, count, cam, cull, counters, out);
+                  SetupTriangle* out, const DepthSetup* depth, double* nearest) {
+  return HWY_DYNAMIC_DISPATCH(SetupBatch)(projected, vertex, triIndex, face, count, cam, cull, counters, out, depth,
+                                          nearest);
 }
 }  // namespace hsr
 #endif

@@ -130,4 +130,25 @@ StoredRange storedRange(const MappedPlanes& m, const double* px, const double* p
   return greater ? StoredRange{highStored(), lowStored()} : StoredRange{lowStored(), highStored()};
 }
 
+/// A stored value that no fragment of `t` is nearer than, for storage S and mapping M: every
+/// covered pixel centre lies in the snapped triangle, so storedRange over its corners bounds it.
+/// (setupBatch computes the same bits with SIMD.)
+template <DepthStorage S, DepthMapping M>
+double nearestStored(const SetupTriangle& t, const DepthSetup& depth) {
+  double px[3], py[3];
+  for (int i = 0; i < 3; ++i) {
+    px[i] = double(t.x[i]) / double(kSubpixelOne);
+    py[i] = double(t.y[i]) / double(kSubpixelOne);
+  }
+  const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, depth.near, depth.far, depth.orthographic);
+  return storedRange<S, M, false>(m, px, py, 3).nearest;
+}
+
+/// nearestStored for the depth setup's format, chosen at run time.
+inline double nearestStored(const SetupTriangle& t, const DepthSetup& depth) {
+  double nearest = 0;
+  visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() { nearest = nearestStored<S, M>(t, depth); });
+  return nearest;
+}
+
 }  // namespace hsr

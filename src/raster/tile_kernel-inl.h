@@ -237,6 +237,7 @@ void RasterizeTileT(const TileJob& job) {
   for (size_t chunk = 0; chunk < bins.chunkCount; ++chunk) {
     const ChunkBins& cb = bins.chunks[chunk];
     const SetupTriangle* tris = bins.triangles[chunk];
+    const double* nearest = bins.nearest[chunk];
     for (uint32_t item = cb.start[size_t(job.tile)], end = cb.start[size_t(job.tile) + 1]; item < end; ++item) {
       const uint32_t ti = cb.items[item];
       const SetupTriangle& t = tris[ti];
@@ -244,11 +245,11 @@ void RasterizeTileT(const TileJob& job) {
         const SetupTriangle* ahead = tris + cb.items[item + 2];
         hwy::Prefetch(ahead);
         hwy::Prefetch(reinterpret_cast<const char*>(ahead) + 64);
-        hwy::Prefetch(cb.nearest.data() + cb.items[item + 2]);
+        hwy::Prefetch(nearest + cb.items[item + 2]);
       }
       // Early rejection: the triangle's nearest possible value is not nearer than the farthest
       // value stored in the tile, so none of its fragments can win here.
-      const double qNear = cb.nearest[ti];
+      const double qNear = nearest[ti];
       // Blocks small triangles wrote to: their farthest values, again, every 16 triangles (a
       // stale value is still a valid bound: writes only bring stored values nearer).
       if (dirtyBlocks && (++sinceRefresh & 15) == 0) {

@@ -16,6 +16,7 @@
 #if HWY_ONCE
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "core/depth_map.hpp"
 #include "raster/fragment_depth.hpp"
@@ -37,8 +38,8 @@ size_t Bins::entries(int tile) const {
 uint64_t Bins::memoryBytes() const {
   uint64_t bytes = triangles.capacity() * sizeof(void*);
   for (const ChunkBins& c : chunks)
-    bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.nearest.capacity() * sizeof(double) +
-             c.pairs.capacity() * sizeof(uint64_t) + sizeof(c);
+    bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.pairs.capacity() * sizeof(uint64_t) +
+             sizeof(c);
   return bytes;
 }
 
@@ -56,19 +57,6 @@ void RasterCounters::add(const RasterCounters& o) {
 }
 
 namespace {
-
-// A stored value that no fragment of `t` can be nearer than, for storage S and mapping M:
-// every covered pixel centre lies in the snapped triangle (raster/fragment_depth.hpp).
-template <DepthStorage S, DepthMapping M>
-double nearestStored(const SetupTriangle& t, const DepthSetup& depth) {
-  double px[3], py[3];
-  for (int i = 0; i < 3; ++i) {
-    px[i] = double(t.x[i]) / double(kSubpixelOne);
-    py[i] = double(t.y[i]) / double(kSubpixelOne);
-  }
-  const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, depth.near, depth.far, depth.orthographic);
-  return storedRange<S, M, false>(m, px, py, 3).nearest;
-}
 
 // Appends (tile << 32 | index) for each tile triangle `index` may cover: the tiles its box
 // overlaps, less those that one edge excludes (all four corner pixel centres of the box's part
@@ -107,21 +95,19 @@ void prepareBins(Bins& bins, int width, int height, size_t chunkCount) {
   bins.chunkCount = chunkCount;
   if (bins.chunks.size() < chunkCount) bins.chunks.resize(chunkCount);
   bins.triangles.assign(chunkCount, nullptr);
+  bins.nearest.assign(chunkCount, nullptr);
 }
 
-void binChunk(Bins& bins, size_t chunk, const std::vector<SetupTriangle>& tris, const DepthSetup& depth) {
+void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles) {
   ChunkBins& cb = bins.chunks[chunk];
+  const std::vector<SetupTriangle>& tris = triangles.triangles;
+  if (triangles.nearest.size() != tris.size())
+    throw std::logic_error("binChunk: the chunk has no nearest bounds (runFrontEnd without nearestFor)");
   bins.triangles[chunk] = tris.data();
+  bins.nearest[chunk] = triangles.nearest.data();
   const size_t n = tris.size(), tiles = size_t(bins.tileCount());
-  cb.nearest.resize(n);
   cb.pairs.clear();
-  // One pass while the chunk is in cache: nearest bounds and (tile, triangle) pairs.
-  visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() {
-    for (size_t i = 0; i < n; ++i) {
-      cb.nearest[i] = nearestStored<S, M>(tris[i], depth);
-      binTriangle(tris[i], uint32_t(i), bins.tilesX, cb.pairs);
-    }
-  });
+  for (size_t i = 0; i < n; ++i) binTriangle(tris[i], uint32_t(i), bins.tilesX, cb.pairs);
   // Counting sort by tile, stable: each tile's triangles stay in submission order.
   cb.start.assign(tiles + 1, 0);
   for (uint64_t p : cb.pairs) ++cb.start[(p >> 32) + 1];

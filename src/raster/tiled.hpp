@@ -19,7 +19,7 @@
 //
 // Early rejection (the base for a hierarchical z-buffer): each tile and each 8x8 block keeps
 // conservative farthest and nearest stored values; a triangle whose conservative nearest value
-// (ChunkBins::nearest) is not nearer than the farthest is skipped for the tile, the block, or
+// (FrontEndChunk::nearest, computed in set-up) is not nearer than the farthest is skipped for the tile, the block, or
 // (counted only) a SIMD row. Statistics it defines: depth_tests = fragments whose depth was
 // computed and compared, plus the pixels of whole-tile/block replacements (rejected ones are
 // not); culled_occlusion = triangle-tile pairs skipped whole. depth_writes is the reference's.
@@ -50,21 +50,11 @@ inline constexpr int kTileSize = 64;
 inline constexpr int kBlockSize = 8;
 inline constexpr int kBlocksPerTile = (kTileSize / kBlockSize) * (kTileSize / kBlockSize);
 
-/// Depth buffer settings of a frame.
-struct DepthSetup {
-  DepthFormat format;
-  double near = 0, far = 0;
-  bool orthographic = false;
-};
-
 /// The bins of one front-end chunk (FrontEndChunk): its triangles grouped by tile, in
-/// submission order within a tile, and the nearest bound of each. Reused across frames.
+/// submission order within a tile. Reused across frames.
 struct ChunkBins {
   std::vector<uint32_t> start;  // tileCount + 1 offsets: items[start[t], start[t + 1]) are tile t's
   std::vector<uint32_t> items;  // indices into the chunk's triangles
-  /// Per triangle: a stored depth value no fragment of it can be nearer than (conservative,
-  /// format specific), or the nearest possible value when no safe bound exists.
-  std::vector<double> nearest;
   std::vector<uint64_t> pairs;  // scratch of binChunk(): tile << 32 | index, in submission order
 };
 
@@ -77,6 +67,7 @@ struct Bins {
   size_t chunkCount = 0;
   std::vector<ChunkBins> chunks;                  // [0, chunkCount) in use
   std::vector<const SetupTriangle*> triangles;    // per chunk: its set-up triangles
+  std::vector<const double*> nearest;             // per chunk: their nearest bounds (FrontEndChunk::nearest)
 
   int tileCount() const { return tilesX * tilesY; }
   size_t entries(int tile) const;
@@ -131,11 +122,12 @@ struct alignas(64) TileScratch {
 };
 
 /// Binning, in two steps: prepareBins() sizes the bins for a width x height image and
-/// `chunkCount` front-end chunks; binChunk(c) sorts chunk c's triangles into its own lists and
-/// computes their nearest bounds for the depth setup. Chunks share no output, so binChunk runs
-/// on any thread, in any order (as runFrontEnd's consumer).
+/// `chunkCount` front-end chunks; binChunk(c) sorts chunk c's triangles into its own lists (the
+/// chunk's `nearest` bounds, from runFrontEnd with the frame's depth setup, are kept for the
+/// kernel). Chunks share no output, so binChunk runs on any thread, in any order (as
+/// runFrontEnd's consumer).
 void prepareBins(Bins& bins, int width, int height, size_t chunkCount);
-void binChunk(Bins& bins, size_t chunk, const std::vector<SetupTriangle>& tris, const DepthSetup& depth);
+void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles);
 
 /// Rasterizes every triangle binned to `tile` into `scratch` (cleared first). With ids false,
 /// only depth is kept (no triangle ids). Adds to `counters`.
