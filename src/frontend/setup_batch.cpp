@@ -71,6 +71,16 @@ HWY_INLINE V NearestStored(const DepthSetup& depth, const PlaneV& N, const Plane
       P = Combine(1, N, -n, Dn);
       Q = Scale(range, Dn);
   }
+  {  // normalize(): a constant Q divides P once, and becomes 1
+    const M constant = hn::And(hn::And(hn::Eq(Q.a, hn::Zero(d)), hn::Eq(Q.b, hn::Zero(d))),
+                               hn::And(hn::Ge(Q.c, hn::Set(d, std::numeric_limits<double>::min())),
+                                       hn::Le(Q.c, hn::Set(d, std::numeric_limits<double>::max()))));
+    const V r = hn::Div(hn::Set(d, 1.0), Q.c);
+    P = {hn::IfThenElse(constant, hn::Mul(P.a, r), P.a), hn::IfThenElse(constant, hn::Mul(P.b, r), P.b),
+         hn::IfThenElse(constant, hn::Mul(P.c, r), P.c)};
+    Q = {hn::IfThenElseZero(hn::Not(constant), Q.a), hn::IfThenElseZero(hn::Not(constant), Q.b),
+         hn::IfThenElse(constant, hn::Set(d, 1.0), Q.c)};
+  }
   const bool greater = mapping == DepthMapping::Reversed || mapping == DepthMapping::Inv;
   const double inf = std::numeric_limits<double>::infinity();
   V maxX = hn::Zero(d), maxY = hn::Zero(d);
@@ -233,10 +243,11 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     // function does (the first that applies).
     const V nearestV = depth ? NearestStored(*depth, {na, nb, nc}, {da, db, dc}, px, py) : zero;
     HWY_ALIGN double lane[23][kSetupBatch];
-    const V fields[23] = {X[0], X[1], X[2], Y[0], Y[1], Y[2], bx0, bx1, by0, by1, na, nb, nc, da, db, dc,
-                          hn::VecFromMask(d, degenerate), hn::VecFromMask(d, culled), hn::VecFromMask(d, noBox),
-                          hn::VecFromMask(d, offScreen), hn::VecFromMask(d, empty), hn::VecFromMask(d, front), nearestV};
-    for (int f = 0; f < 23; ++f) hn::Store(fields[f], d, lane[f]);
+    int field = 0;
+    for (const V v : {X[0], X[1], X[2], Y[0], Y[1], Y[2], bx0, bx1, by0, by1, na, nb, nc, da, db, dc})
+      hn::Store(v, d, lane[field++]);
+    for (const M m : {degenerate, culled, noBox, offScreen, empty, front}) hn::Store(hn::VecFromMask(d, m), d, lane[field++]);
+    hn::Store(nearestV, d, lane[field]);
     auto flag = [&](int f, size_t j) { return lane[f][j] != 0; };
     for (size_t j = 0; j < lanes; ++j) {
       if (flag(16, j)) {

@@ -29,9 +29,12 @@
 
 namespace hsr {
 
-/// The mapped depth of a triangle's fragments: v(x, y) = p(x, y) / q(x, y), q > 0.
+/// The mapped depth of a triangle's fragments: v(x, y) = p(x, y) / q(x, y), q > 0. When q is a
+/// constant (`affine`), mapPlanes has divided p by it once and q is exactly 1: the mapped depth is
+/// the affine function p, and p / q = p bit for bit, so a rasterizer may skip the division.
 struct MappedPlanes {
   Plane p, q;
+  bool affine = false;
 };
 
 /// P and Q for mapping M (near n, far f): with d = N / D,
@@ -39,8 +42,24 @@ struct MappedPlanes {
 ///   reversed: n (f - d) / ((f - n) d) = n (f D - N) / ((f - n) N)    (orthographic: (f D - N) / ((f - n) D))
 ///   inv:      n / d                   = n D / N
 ///   linear:   (d - n) / (f - n)       = (N - n D) / ((f - n) D)
+/// With a perspective camera w is the eye depth, so N = d / w is exactly 1 at every vertex and
+/// its plane is the constant 1; Q is then constant for z, reversed and inv (and with an
+/// orthographic camera D = 1 / w = 1 makes it constant for z, reversed and linear): the mapped
+/// depth is affine in the image — the property GPUs' z / w has — and normalize() turns P / Q
+/// into P' = P * (1 / Q), one division per triangle instead of one per fragment.
+inline MappedPlanes normalize(MappedPlanes m) {
+  if (m.q.a == 0 && m.q.b == 0 && m.q.c >= std::numeric_limits<double>::min() &&
+      m.q.c <= std::numeric_limits<double>::max()) {
+    const double r = 1.0 / m.q.c;
+    m.p = Plane{m.p.a * r, m.p.b * r, m.p.c * r};
+    m.q = Plane{0.0, 0.0, 1.0};
+    m.affine = true;
+  }
+  return m;
+}
+
 template <DepthMapping M>
-inline MappedPlanes mapPlanes(const Plane& N, const Plane& D, double n, double f, bool ortho) {
+inline MappedPlanes mapPlanesRaw(const Plane& N, const Plane& D, double n, double f, bool ortho) {
   auto combine = [](double s, const Plane& a, double t, const Plane& b) {  // s a + t b
     return Plane{s * a.a + t * b.a, s * a.b + t * b.b, s * a.c + t * b.c};
   };
@@ -59,6 +78,12 @@ inline MappedPlanes mapPlanes(const Plane& N, const Plane& D, double n, double f
   }
 }
 
+/// P and Q of mapping M, normalized (see normalize()): what every rasterizer uses.
+template <DepthMapping M>
+inline MappedPlanes mapPlanes(const Plane& N, const Plane& D, double n, double f, bool ortho) {
+  return normalize(mapPlanesRaw<M>(N, D, n, f, ortho));
+}
+
 /// The stored value (as double: exact for every storage) of the ratio p / q: clamped to [0, 1]
 /// as std::clamp does (NaN stays NaN), rounded as the storage does.
 template <DepthStorage S>
@@ -70,7 +95,9 @@ inline double storedOfRatio(double p, double q) {
 /// `qRow` = m.q.b * Y (computed once per row, as the SIMD kernel does).
 template <DepthStorage S>
 inline double fragmentStored(const MappedPlanes& m, double X, double pRow, double qRow) {
-  return storedOfRatio<S>((m.p.a * X + pRow) + m.p.c, (m.q.a * X + qRow) + m.q.c);
+  const double p = (m.p.a * X + pRow) + m.p.c;
+  if (m.affine) return double(quantizeDepth<S>(std::clamp(p, 0.0, 1.0)));  // p / 1, without dividing
+  return storedOfRatio<S>(p, (m.q.a * X + qRow) + m.q.c);
 }
 
 /// Stored values (as double) no fragment is nearer / farther than.

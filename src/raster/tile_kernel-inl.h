@@ -76,6 +76,7 @@ template <DepthStorage S>
 HWY_INLINE V StoredDepth(const MappedPlanes& m, V X, double Y) {
   const D d;
   const V p = hn::Add(hn::Add(hn::Mul(hn::Set(d, m.p.a), X), hn::Set(d, m.p.b * Y)), hn::Set(d, m.p.c));
+  if (m.affine) return Quantize<S>(Clamp01(p));  // q = 1: p / q is p
   const V q = hn::Add(hn::Add(hn::Mul(hn::Set(d, m.q.a), X), hn::Set(d, m.q.b * Y)), hn::Set(d, m.q.c));
   return Quantize<S>(Clamp01(hn::Div(p, q)));
 }
