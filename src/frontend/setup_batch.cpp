@@ -71,8 +71,9 @@ HWY_INLINE V NearestStored(const DepthSetup& depth, const PlaneV& N, const Plane
       P = Combine(1, N, -n, Dn);
       Q = Scale(range, Dn);
   }
+  M constant;
   {  // normalize(): a constant Q divides P once, and becomes 1
-    const M constant = hn::And(hn::And(hn::Eq(Q.a, hn::Zero(d)), hn::Eq(Q.b, hn::Zero(d))),
+    constant = hn::And(hn::And(hn::Eq(Q.a, hn::Zero(d)), hn::Eq(Q.b, hn::Zero(d))),
                                hn::And(hn::Ge(Q.c, hn::Set(d, std::numeric_limits<double>::min())),
                                        hn::Le(Q.c, hn::Set(d, std::numeric_limits<double>::max()))));
     const V r = hn::Div(hn::Set(d, 1.0), Q.c);
@@ -110,11 +111,13 @@ HWY_INLINE V NearestStored(const DepthSetup& depth, const PlaneV& N, const Plane
                             hn::And(hn::IsFinite(pMax), hn::IsFinite(qMax)));
   const V margin = hn::Set(d, 1e-12);
   V v;
-  if (greater) {  // highStored: the largest value
+  if (greater) {  // highStored: the largest value (just pMax when affine)
     v = hn::IfThenElse(hn::Ge(pMax, hn::Zero(d)), hn::Div(pMax, qMin), hn::Div(pMax, qMax));
+    v = hn::IfThenElse(constant, pMax, v);
     v = hn::Add(v, hn::Mul(hn::Abs(v), margin));
   } else {  // lowStored: the smallest
     v = hn::IfThenElse(hn::Ge(pMin, hn::Zero(d)), hn::Div(pMin, qMax), hn::Div(pMin, qMin));
+    v = hn::IfThenElse(constant, pMin, v);
     v = hn::Sub(v, hn::Mul(hn::Abs(v), margin));
   }
   // std::clamp(v, 0, 1), then quantizeDepth of the storage (as a double).

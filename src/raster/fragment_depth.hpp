@@ -142,14 +142,15 @@ StoredRange storedRange(const MappedPlanes& m, const double* px, const double* p
   qMin -= qErr;
   qMax += qErr;
   if (!(qMin > 0) || !std::isfinite(pMin) || !std::isfinite(pMax) || !std::isfinite(qMax)) return none;
-  // p / q over [pMin, pMax] x [qMin, qMax], q > 0; then room for the divisions' rounding.
+  // p / q over [pMin, pMax] x [qMin, qMax], q > 0 (just p when affine: q = 1 and fragments do
+  // not divide); then room for the divisions' rounding.
   auto lowStored = [&] {
-    double low = pMin >= 0 ? pMin / qMax : pMin / qMin;
+    double low = m.affine ? pMin : pMin >= 0 ? pMin / qMax : pMin / qMin;
     low -= std::abs(low) * 1e-12;
     return double(quantizeDepth<S>(std::clamp(low, 0.0, 1.0)));
   };
   auto highStored = [&] {
-    double high = pMax >= 0 ? pMax / qMin : pMax / qMax;
+    double high = m.affine ? pMax : pMax >= 0 ? pMax / qMin : pMax / qMax;
     high += std::abs(high) * 1e-12;
     return double(quantizeDepth<S>(std::clamp(high, 0.0, 1.0)));
   };
