@@ -5,11 +5,13 @@
 //    the stored depth and, when strictly nearer, overwrites depth, colour and the triangle id;
 //    a resolve pass then turns triangle ids into face ids and exact eye depths;
 //  - the default, tiled (raster/tiled.hpp): the same fragments, compared and stored with the
-//    same arithmetic, but binned into tiles that threads own whole, rasterized with SIMD, with
-//    early rejection of triangles behind a tile's or block's farthest stored depth, whole tiles
-//    and blocks replaced at once by a triangle in front of all they hold, and colour, ids and
-//    depth resolved per tile into a frame that is never cleared separately. Bit-identical
-//    results and equal depth_writes.
+//    same arithmetic, but binned into tiles that threads own whole, each tile's triangles
+//    visited nearest first (a tie goes to the triangle submitted first, so the image is the
+//    submission order's), rasterized with SIMD, with early rejection of triangles behind a
+//    tile's or block's farthest stored depth, whole tiles and blocks replaced at once by a
+//    triangle in front of all they hold, and colour, ids and depth resolved per tile into a
+//    frame that is never cleared separately. Bit-identical results, with less work: its
+//    depth_tests and depth_writes count what it did (fewer than the reference's).
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -124,10 +126,18 @@ void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const Triangle
   const tiled::Bins& bins = state.bins;
   const int segmentsX = (bins.tilesX + kSegmentTiles - 1) / kSegmentTiles;
   const size_t segments = size_t(segmentsX) * size_t(bins.tilesY);
-  size_t work = 0;
-  for (int tile = 0; tile < bins.tileCount(); ++tile) work += bins.entries(tile) + kWorkPerTile;
+  size_t work = 0, mostEntries = 0;
+  for (int tile = 0; tile < bins.tileCount(); ++tile) {
+    const size_t entries = bins.entries(tile);
+    work += entries + kWorkPerTile;
+    mostEntries = std::max(mostEntries, entries);
+  }
   const int workers = int(std::clamp<size_t>(work / kWorkPerThread, 1, size_t(threads)));
   if (state.scratch.size() < size_t(workers) * kSegmentTiles) state.scratch.resize(size_t(workers) * kSegmentTiles);
+  for (tiled::TileScratch& scratch : state.scratch) {  // any worker may meet the fullest tile
+    scratch.entries.reserve(mostEntries);
+    scratch.ordered.reserve(mostEntries);
+  }
   state.counters.assign(size_t(bins.tileCount()), {});
   state.covered.assign(size_t(bins.tileCount()), 0);
   const bool ids = opt.outputs != FrameOutputs::DepthOnly;
@@ -182,6 +192,8 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
     bufferBytes = state.bins.memoryBytes() + state.scratch.size() * sizeof(tiled::TileScratch) +
                   state.counters.capacity() * sizeof(tiled::RasterCounters) +
                   state.covered.capacity() * sizeof(uint64_t);
+    for (const tiled::TileScratch& scratch : state.scratch)
+      bufferBytes += (scratch.entries.capacity() + scratch.ordered.capacity()) * sizeof(tiled::TileEntry);
   } else {
     runFrontEnd(scene, cam, opt, fe);
     const std::vector<SetupTriangle> tris = fe.flatten();
@@ -205,7 +217,8 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
   st.depth_tests = n.tests;
   st.depth_writes = n.writes;
   // Fragments that won the depth test: each writes the colour in the reference; the tiled path
-  // writes colour once per pixel when resolving the tile, the count stays that of the reference.
+  // writes the winner's id instead and its colour once per pixel at resolve (deferred), counted
+  // like the reference, one per winning fragment.
   st.color_writes = opt.outputs == FrameOutputs::All ? n.writes : 0;
   st.covered_pixels = n.covered;
   const uint64_t pixels = uint64_t(cam.width) * cam.height;

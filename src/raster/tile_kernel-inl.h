@@ -50,6 +50,23 @@ HWY_INLINE Mask Nearer(V a, V b) {
   else return hn::Lt(a, b);
 }
 
+// "a is nearer than b or equal to it" for the format's compare direction.
+template <bool kGreater>
+HWY_INLINE Mask NotFarther(V a, V b) {
+  if constexpr (kGreater) return hn::Ge(a, b);
+  else return hn::Le(a, b);
+}
+
+// A triangle whose fragments are at best `nearest` cannot change a cell that holds `stored`:
+// nearest is farther (with ids: a fragment equal to the stored value wins when its triangle was
+// submitted first, so only a farther one is beaten), or, depth only, not nearer (equal values
+// leave the depth as it is).
+template <DepthMapping M, bool kIds>
+HWY_INLINE bool Beaten(double nearest, double stored) {
+  if constexpr (kIds) return storedNearer<M>(stored, nearest);
+  else return !storedNearer<M>(nearest, stored);
+}
+
 // std::clamp(v, 0, 1) lane by lane (v < 0 ? 0 : 1 < v ? 1 : v, which keeps NaN and -0).
 HWY_INLINE V Clamp01(V v) {
   const D d;
@@ -206,6 +223,7 @@ void RasterizeTileT(const TileJob& job) {
   constexpr int kBlocksX = kTileSize / kBlockSize;
   const D d;
   const DU du;
+  const hn::RebindToSigned<DU> di;  // keys compared as signed: they are below 2^63
   const size_t N = hn::Lanes(d);
   TileScratch& s = *job.scratch;
   RasterCounters count;  // added to the job's at the end
@@ -235,22 +253,20 @@ void RasterizeTileT(const TileJob& job) {
   uint64_t dirtyBlocks = 0;
   unsigned sinceRefresh = 0;
 
-  for (size_t chunk = 0; chunk < bins.chunkCount; ++chunk) {
-    const ChunkBins& cb = bins.chunks[chunk];
-    const SetupTriangle* tris = bins.triangles[chunk];
-    const double* nearest = bins.nearest[chunk];
-    for (uint32_t item = cb.start[size_t(job.tile)], end = cb.start[size_t(job.tile) + 1]; item < end; ++item) {
-      const uint32_t ti = cb.items[item];
-      const SetupTriangle& t = tris[ti];
-      if (item + 2 < end) {  // the records are scattered over the chunk: fetch ahead
-        const SetupTriangle* ahead = tris + cb.items[item + 2];
-        hwy::Prefetch(ahead);
-        hwy::Prefetch(reinterpret_cast<const char*>(ahead) + 64);
-        hwy::Prefetch(nearest + cb.items[item + 2]);
+  // The tile's triangles, roughly nearest first (orderTile): any order gives the same image.
+  const std::vector<TileEntry>& order = orderTile(bins, job.tile, kGreater, s);
+  {
+    for (size_t item = 0, end = order.size(); item < end; ++item) {
+      const SetupTriangle& t = *order[item].triangle;
+      if (item + 2 < end) {  // the records are scattered over the chunks: fetch ahead
+        hwy::Prefetch(order[item + 2].triangle);
+        hwy::Prefetch(reinterpret_cast<const char*>(order[item + 2].triangle) + 64);
       }
-      // Early rejection: the triangle's nearest possible value is not nearer than the farthest
-      // value stored in the tile, so none of its fragments can win here.
-      const double qNear = nearest[ti];
+      const uint64_t key = order[item].key;
+      // Early rejection: the triangle's nearest possible value is farther than the farthest
+      // value stored in the tile (or, without ids, not nearer), so none of its fragments can
+      // win here.
+      const double qNear = order[item].nearest;
       // Blocks small triangles wrote to: their farthest values, again, every 16 triangles (a
       // stale value is still a valid bound: writes only bring stored values nearer).
       if (dirtyBlocks && (++sinceRefresh & 15) == 0) {
@@ -272,7 +288,7 @@ void RasterizeTileT(const TileJob& job) {
         s.tileFar = FarthestLane<kGreater>(far);
         s.tileFarStale = false;
       }
-      if (!storedNearer<M>(qNear, s.tileFar)) {
+      if (Beaten<M, kIds>(qNear, s.tileFar)) {
         ++count.culledTiles;
         continue;
       }
@@ -291,7 +307,7 @@ void RasterizeTileT(const TileJob& job) {
           if (storedNearer<M>(r.farthest, s.tileNear)) {
             s.state = TileState::Plane;
             s.plane = &t;
-            s.planeKey = triangleKey(chunk, ti);
+            s.planeKey = key;
             s.tileFar = r.farthest;
             s.tileNear = r.nearest;
             s.tileFarStale = false;
@@ -316,7 +332,6 @@ void RasterizeTileT(const TileJob& job) {
         laneE[i] = hn::Mul(lane, hn::Set(d, double(e[i].stepX())));  // lane j: j * stepX, exact
         biasV[i] = hn::Set(d, double(e[i].bias));
       }
-      const uint64_t key = triangleKey(chunk, ti);
 
       // Small triangles (a box of at most kSmallPixels centres, most of a million-triangle
       // mesh): pixel by pixel in scalar code, with the same operations as the lanes below.
@@ -333,10 +348,10 @@ void RasterizeTileT(const TileJob& job) {
             if (E[0] >= e[0].bias && E[1] >= e[1].bias && E[2] >= e[2].bias) {
               const size_t at = size_t(y) * kTileSize + size_t(x);
               const double stored = s.depth[at];
-              if (storedNearer<M>(qNear, stored)) {
+              if (!Beaten<M, kIds>(qNear, stored)) {
                 const double z = fragmentStored<S>(m, double(x) + (double(x0) + 0.5), pRow, qRow);
                 ++tests;
-                if (storedNearer<M>(z, stored)) {
+                if (storedNearer<M>(z, stored) || (kIds && z == stored && key < s.triangle[at])) {
                   ++writes;
                   s.depth[at] = z;
                   if constexpr (kIds) s.triangle[at] = key;
@@ -366,7 +381,7 @@ void RasterizeTileT(const TileJob& job) {
       for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
         for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx) {
           const int b = by * kBlocksX + bx;
-          if (!storedNearer<M>(qNear, s.blockFar[b])) {
+          if (Beaten<M, kIds>(qNear, s.blockFar[b])) {
             if constexpr (kCountBlocks) ++count.blocksCulled;
             continue;
           }
@@ -436,18 +451,20 @@ void RasterizeTileT(const TileJob& job) {
               // Only pixels where something farther than the triangle's nearest value is stored
               // can change (counted as tested). The row is computed without branches either
               // way: a mispredicted branch costs more than the division it would save.
-              const Mask maybe = hn::And(cover, Nearer<kGreater>(qNearV, stored));
+              const Mask maybe = hn::And(cover, kIds ? NotFarther<kGreater>(qNearV, stored) : Nearer<kGreater>(qNearV, stored));
               // Pixel centres X = x + 0.5; depth = P(X, Y) / Q(X, Y) (raster/fragment_depth.hpp).
               const V z = constantDepth ? zConstant : StoredDepth<S>(m, hn::Add(col, hn::Set(d, double(x0) + 0.5)), Y);
-              const Mask win = hn::And(maybe, Nearer<kGreater>(z, stored));
+              Mask win = hn::And(maybe, Nearer<kGreater>(z, stored));
+              if constexpr (kIds) {  // a tie goes to the triangle submitted first
+                const auto old = hn::Load(du, s.triangle + at);
+                const Mask tie = hn::And(hn::Eq(z, stored), hn::RebindMask(d, hn::Lt(hn::BitCast(di, idV), hn::BitCast(di, old))));
+                win = hn::Or(win, hn::And(maybe, tie));
+                hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
+              }
               tests += hn::CountTrue(d, maybe);
               writes += hn::CountTrue(d, win);
               result = hn::IfThenElse(win, z, stored);
               hn::Store(result, d, s.depth + at);
-              if constexpr (kIds) {
-                const auto old = hn::Load(du, s.triangle + at);
-                hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
-              }
               nearestWritten = NearerOf<kGreater>(nearestWritten, hn::IfThenElse(win, z, farthestV));
               wroteMask = hn::Or(wroteMask, hn::VecFromMask(d, win));
               if constexpr (kCountBlocks) count.rowsCulled += hn::AllFalse(d, maybe) && !hn::AllFalse(d, cover);

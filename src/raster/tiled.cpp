@@ -118,6 +118,43 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles) {
   cb.start[0] = 0;
 }
 
+const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater, TileScratch& scratch) {
+  std::vector<TileEntry>& in = scratch.entries;
+  std::vector<TileEntry>& out = scratch.ordered;
+  in.clear();
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (size_t c = 0; c < bins.chunkCount; ++c) {
+    const ChunkBins& cb = bins.chunks[c];
+    const SetupTriangle* tris = bins.triangles[c];
+    const double* nearest = bins.nearest[c];
+    for (uint32_t item = cb.start[size_t(tile)], end = cb.start[size_t(tile) + 1]; item < end; ++item) {
+      const uint32_t ti = cb.items[item];
+      const double v = nearest[ti];
+      in.push_back({tris + ti, v, triangleKey(c, ti)});
+      if (std::isfinite(v)) {
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+      }
+    }
+  }
+  if (in.size() < 2 || !(hi > lo)) return in;
+  // Counting sort into buckets of equal width between the extreme bounds, nearest bucket first;
+  // bounds that are not finite ("none") go first.
+  constexpr int kBuckets = 32;
+  const double scale = kBuckets / (hi - lo);
+  auto bucket = [&](double v) {
+    const double rank = greater ? (hi - v) * scale : (v - lo) * scale;
+    if (!(rank >= 0)) return 0;  // NaN, and "none" (the nearest possible value): first
+    return rank < kBuckets ? int(rank) : kBuckets - 1;
+  };
+  uint32_t start[kBuckets + 1] = {};
+  for (const TileEntry& e : in) ++start[bucket(e.nearest) + 1];
+  for (int b = 0; b < kBuckets; ++b) start[b + 1] += start[b];
+  out.resize(in.size());
+  for (const TileEntry& e : in) out[start[bucket(e.nearest)]++] = e;
+  return out;
+}
+
 void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids, TileScratch& scratch,
                    RasterCounters& counters) {
   const TileJob job{&bins, tile, depth, ids, &scratch, &counters, nullptr};

@@ -22,7 +22,9 @@
 // (FrontEndChunk::nearest, computed in set-up) is not nearer than the farthest is skipped for the tile, the block, or
 // (counted only) a SIMD row. Statistics it defines: depth_tests = fragments whose depth was
 // computed and compared, plus the pixels of whole-tile/block replacements (rejected ones are
-// not); culled_occlusion = triangle-tile pairs skipped whole. depth_writes is the reference's.
+// not); culled_occlusion = triangle-tile pairs skipped whole; depth_writes = fragments that won
+// (each tile's triangles are visited nearest first, see orderTile, so far fewer are tested and
+// written than in submission order when a scene is drawn back to front).
 #pragma once
 #include <hsr/frame.hpp>
 #include <hsr/render.hpp>
@@ -98,6 +100,13 @@ struct RasterCounters {
 /// Pixels: the buffers hold every pixel's value.
 enum class TileState : uint8_t { Clear, Plane, Pixels };
 
+/// One triangle binned to a tile, as the kernel visits it.
+struct TileEntry {
+  const SetupTriangle* triangle;
+  double nearest;  // its nearest bound (FrontEndChunk::nearest)
+  uint64_t key;    // triangleKey: submission order
+};
+
 /// A worker's tile: stored depth (as double: every format's values are exact in it) and the
 /// winning triangle (triangleKey, 0 = none), row-major kTileSize x kTileSize, plus the farthest
 /// stored value per block and per tile that reject triangles early, and the nearest stored
@@ -119,7 +128,18 @@ struct alignas(64) TileScratch {
   TileState state;
   const SetupTriangle* plane;  // state Plane: the triangle, and its key
   uint64_t planeKey;
+  std::vector<TileEntry> entries, ordered;  // orderTile()'s lists
 };
+
+/// The triangles binned to `tile`, roughly nearest first (a stable bucket sort of their nearest
+/// bounds: `greater` = larger stored values are nearer), in `scratch.ordered`, which it returns.
+/// The kernel's depth test makes the order free: a fragment wins when it is strictly nearer
+/// than the stored value, or equal to it and its triangle was submitted first (triangleKey) —
+/// per pixel, the nearest fragment and, among equals, the first submitted: the image the z-buffer
+/// draws in submission order, bit for bit. Nearest first, the tiles' and blocks' farthest depths
+/// reject most hidden triangles before their pixels are visited (the front-to-back + z-buffer
+/// combination of documents 000/001, per tile).
+const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater, TileScratch& scratch);
 
 /// Binning, in two steps: prepareBins() sizes the bins for a width x height image and
 /// `chunkCount` front-end chunks; binChunk(c) sorts chunk c's triangles into its own lists (the
