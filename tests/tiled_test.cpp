@@ -231,7 +231,7 @@ TEST(Tiled, BinsAreInSubmissionOrderWhateverTheChunkOrder) {
       const tiled::ChunkBins& cb = bins.chunks[c];
       for (int t = 0; t < bins.tileCount(); ++t)
         for (uint32_t k = cb.start[size_t(t)]; k < cb.start[size_t(t) + 1]; ++k)
-          lists[size_t(t)].emplace_back(base + cb.items[k], bins.nearest[c][cb.items[k]]);
+          lists[size_t(t)].emplace_back(base + cb.items[k], cb.itemNearest[k]);
       base += fe.chunks[c].triangles.size();
     }
     return lists;

@@ -137,6 +137,7 @@ void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const Triangle
   for (tiled::TileScratch& scratch : state.scratch) {  // any worker may meet the fullest tile
     scratch.entries.reserve(mostEntries);
     scratch.ordered.reserve(mostEntries);
+    scratch.bucket.reserve(mostEntries);
   }
   state.counters.assign(size_t(bins.tileCount()), {});
   state.covered.assign(size_t(bins.tileCount()), 0);
@@ -193,7 +194,8 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
                   state.counters.capacity() * sizeof(tiled::RasterCounters) +
                   state.covered.capacity() * sizeof(uint64_t);
     for (const tiled::TileScratch& scratch : state.scratch)
-      bufferBytes += (scratch.entries.capacity() + scratch.ordered.capacity()) * sizeof(tiled::TileEntry);
+      bufferBytes += (scratch.entries.capacity() + scratch.ordered.capacity()) * sizeof(tiled::TileEntry) +
+                     scratch.bucket.capacity();
   } else {
     runFrontEnd(scene, cam, opt, fe);
     const std::vector<SetupTriangle> tris = fe.flatten();

@@ -39,7 +39,7 @@ uint64_t Bins::memoryBytes() const {
   uint64_t bytes = triangles.capacity() * sizeof(void*);
   for (const ChunkBins& c : chunks)
     bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.pairs.capacity() * sizeof(uint64_t) +
-             sizeof(c);
+             c.itemNearest.capacity() * sizeof(double) + sizeof(c);
   return bytes;
 }
 
@@ -95,7 +95,6 @@ void prepareBins(Bins& bins, int width, int height, size_t chunkCount) {
   bins.chunkCount = chunkCount;
   if (bins.chunks.size() < chunkCount) bins.chunks.resize(chunkCount);
   bins.triangles.assign(chunkCount, nullptr);
-  bins.nearest.assign(chunkCount, nullptr);
 }
 
 void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles) {
@@ -104,7 +103,6 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles) {
   if (triangles.nearest.size() != tris.size())
     throw std::logic_error("binChunk: the chunk has no nearest bounds (runFrontEnd without nearestFor)");
   bins.triangles[chunk] = tris.data();
-  bins.nearest[chunk] = triangles.nearest.data();
   const size_t n = tris.size(), tiles = size_t(bins.tileCount());
   cb.pairs.clear();
   for (size_t i = 0; i < n; ++i) binTriangle(tris[i], uint32_t(i), bins.tilesX, cb.pairs);
@@ -113,7 +111,13 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles) {
   for (uint64_t p : cb.pairs) ++cb.start[(p >> 32) + 1];
   for (size_t t = 0; t < tiles; ++t) cb.start[t + 1] += cb.start[t];
   cb.items.resize(cb.pairs.size());
-  for (uint64_t p : cb.pairs) cb.items[cb.start[p >> 32]++] = uint32_t(p);
+  cb.itemNearest.resize(cb.pairs.size());
+  const double* nearest = triangles.nearest.data();
+  for (uint64_t p : cb.pairs) {
+    const uint32_t at = cb.start[p >> 32]++;
+    cb.items[at] = uint32_t(p);
+    cb.itemNearest[at] = nearest[uint32_t(p)];  // next to the item: the tile pass reads them in order
+  }
   for (size_t t = tiles; t > 0; --t) cb.start[t] = cb.start[t - 1];  // back to the beginnings
   cb.start[0] = 0;
 }
@@ -121,37 +125,38 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles) {
 const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater, TileScratch& scratch) {
   std::vector<TileEntry>& in = scratch.entries;
   std::vector<TileEntry>& out = scratch.ordered;
-  in.clear();
+  in.resize(bins.entries(tile));  // (capacity reserved by the caller: no allocation once warm)
+  TileEntry* entry = in.data();
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  bool finite = true;
   for (size_t c = 0; c < bins.chunkCount; ++c) {
     const ChunkBins& cb = bins.chunks[c];
     const SetupTriangle* tris = bins.triangles[c];
-    const double* nearest = bins.nearest[c];
+    const uint64_t chunkKey = triangleKey(c, 0);
     for (uint32_t item = cb.start[size_t(tile)], end = cb.start[size_t(tile) + 1]; item < end; ++item) {
       const uint32_t ti = cb.items[item];
-      const double v = nearest[ti];
-      in.push_back({tris + ti, v, triangleKey(c, ti)});
-      if (std::isfinite(v)) {
-        lo = std::min(lo, v);
-        hi = std::max(hi, v);
-      }
+      const double v = cb.itemNearest[item];
+      *entry++ = {tris + ti, v, chunkKey + ti};
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+      finite &= v - v == 0;  // false for infinities and NaN
     }
   }
-  if (in.size() < 2 || !(hi > lo)) return in;
-  // Counting sort into buckets of equal width between the extreme bounds, nearest bucket first;
-  // bounds that are not finite ("none") go first.
+  if (in.size() < 2 || !finite || !(hi > lo) || !std::isfinite(hi - lo)) return in;  // (unsorted: any order is right)
+  // Counting sort into buckets of equal width between the extreme bounds, nearest bucket first.
   constexpr int kBuckets = 32;
-  const double scale = kBuckets / (hi - lo);
-  auto bucket = [&](double v) {
-    const double rank = greater ? (hi - v) * scale : (v - lo) * scale;
-    if (!(rank >= 0)) return 0;  // NaN, and "none" (the nearest possible value): first
-    return rank < kBuckets ? int(rank) : kBuckets - 1;
-  };
+  const double scale = (kBuckets - 0.5) / (hi - lo), origin = greater ? hi : lo;
+  const double sign = greater ? -scale : scale;  // rank = (v - origin) * sign, in [0, kBuckets)
   uint32_t start[kBuckets + 1] = {};
-  for (const TileEntry& e : in) ++start[bucket(e.nearest) + 1];
+  scratch.bucket.resize(in.size());
+  uint8_t* bucket = scratch.bucket.data();
+  for (size_t i = 0; i < in.size(); ++i) {
+    bucket[i] = uint8_t((in[i].nearest - origin) * sign);
+    ++start[bucket[i] + 1];
+  }
   for (int b = 0; b < kBuckets; ++b) start[b + 1] += start[b];
   out.resize(in.size());
-  for (const TileEntry& e : in) out[start[bucket(e.nearest)]++] = e;
+  for (size_t i = 0; i < in.size(); ++i) out[start[bucket[i]]++] = in[i];
   return out;
 }
 

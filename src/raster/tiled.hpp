@@ -57,6 +57,7 @@ inline constexpr int kBlocksPerTile = (kTileSize / kBlockSize) * (kTileSize / kB
 struct ChunkBins {
   std::vector<uint32_t> start;  // tileCount + 1 offsets: items[start[t], start[t + 1]) are tile t's
   std::vector<uint32_t> items;  // indices into the chunk's triangles
+  std::vector<double> itemNearest;  // per item: its triangle's nearest bound (FrontEndChunk::nearest)
   std::vector<uint64_t> pairs;  // scratch of binChunk(): tile << 32 | index, in submission order
 };
 
@@ -69,7 +70,6 @@ struct Bins {
   size_t chunkCount = 0;
   std::vector<ChunkBins> chunks;                  // [0, chunkCount) in use
   std::vector<const SetupTriangle*> triangles;    // per chunk: its set-up triangles
-  std::vector<const double*> nearest;             // per chunk: their nearest bounds (FrontEndChunk::nearest)
 
   int tileCount() const { return tilesX * tilesY; }
   size_t entries(int tile) const;
@@ -129,10 +129,12 @@ struct alignas(64) TileScratch {
   const SetupTriangle* plane;  // state Plane: the triangle, and its key
   uint64_t planeKey;
   std::vector<TileEntry> entries, ordered;  // orderTile()'s lists
+  std::vector<uint8_t> bucket;
 };
 
 /// The triangles binned to `tile`, roughly nearest first (a stable bucket sort of their nearest
-/// bounds: `greater` = larger stored values are nearer), in `scratch.ordered`, which it returns.
+/// bounds: `greater` = larger stored values are nearer; in submission order when a bound is not
+/// finite), in `scratch.ordered` or `scratch.entries`, which it returns.
 /// The kernel's depth test makes the order free: a fragment wins when it is strictly nearer
 /// than the stored value, or equal to it and its triangle was submitted first (triangleKey) —
 /// per pixel, the nearest fragment and, among equals, the first submitted: the image the z-buffer
