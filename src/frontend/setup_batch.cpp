@@ -242,34 +242,27 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     through(num, na, nb, nc);
     through(den, da, db, dc);
 
-    // Back to one SetupTriangle per surviving lane, in order; reasons counted as the scalar
-    // function does (the first that applies).
+    // Reasons counted as the scalar function does (the first that applies), without a branch
+    // per lane; then one SetupTriangle per surviving lane, in order.
+    const M valid = hn::FirstN(d, lanes);
+    const M live = hn::AndNot(hn::Or(degenerate, culled), valid);  // (culled excludes degenerate)
+    counters.degenerate += hn::CountTrue(d, hn::And(valid, degenerate));
+    counters.culledBackface += hn::CountTrue(d, hn::And(valid, culled));
+    counters.culledFrustum += hn::CountTrue(d, hn::And(live, hn::And(noBox, offScreen)));
+    counters.empty += hn::CountTrue(d, hn::And(live, empty));  // (empty excludes noBox)
+    const M survivors = hn::AndNot(hn::Or(noBox, empty), live);
+    if (hn::AllFalse(d, survivors)) continue;
     const V nearestV = depth ? NearestStored(*depth, {na, nb, nc}, {da, db, dc}, px, py) : zero;
-    HWY_ALIGN double lane[23][kSetupBatch];
+    HWY_ALIGN double lane[18][kSetupBatch];
     int field = 0;
-    for (const V v : {X[0], X[1], X[2], Y[0], Y[1], Y[2], bx0, bx1, by0, by1, na, nb, nc, da, db, dc})
+    for (const V v : {X[0], X[1], X[2], Y[0], Y[1], Y[2], bx0, bx1, by0, by1, na, nb, nc, da, db, dc, nearestV})
       hn::Store(v, d, lane[field++]);
-    for (const M m : {degenerate, culled, noBox, offScreen, empty, front}) hn::Store(hn::VecFromMask(d, m), d, lane[field++]);
-    hn::Store(nearestV, d, lane[field]);
-    auto flag = [&](int f, size_t j) { return lane[f][j] != 0; };
-    for (size_t j = 0; j < lanes; ++j) {
-      if (flag(16, j)) {
-        ++counters.degenerate;
-        continue;
-      }
-      if (flag(17, j)) {
-        ++counters.culledBackface;
-        continue;
-      }
-      if (flag(18, j)) {
-        if (flag(19, j)) ++counters.culledFrustum;
-        continue;
-      }
-      if (flag(20, j)) {
-        ++counters.empty;
-        continue;
-      }
-      if (depth) nearest[written] = lane[22][j];
+    hn::Store(hn::VecFromMask(d, front), d, lane[field]);
+    uint8_t survivorBits[8] = {};
+    hn::StoreMaskBits(d, survivors, survivorBits);
+    for (unsigned bits = survivorBits[0]; bits; bits &= bits - 1) {
+      const size_t j = hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
+      if (depth) nearest[written] = lane[16][j];
       SetupTriangle& t = out[written++];
       for (int k = 0; k < 3; ++k) {
         t.x[k] = int32_t(lane[k][j]);
@@ -283,7 +276,7 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
       t.depthDen = Plane{lane[13][j], lane[14][j], lane[15][j]};
       t.triangle = triIndex[first + j];
       t.face = face[first + j];
-      t.frontFacing = flag(21, j);
+      t.frontFacing = lane[17][j] != 0;
     }
   }
   return written;
