@@ -258,7 +258,9 @@ void RasterizeTileT(const TileJob& job) {
   {
     for (size_t item = 0, end = order.size(); item < end; ++item) {
       const SetupTriangle& t = *order[item].triangle;
-      if (item + 2 < end) {  // the records are scattered over the chunks: fetch ahead
+      // The records are scattered over the chunks: fetch ahead those of triangles the tile's
+      // bound does not reject already (nearest first, most hidden ones are rejected unread).
+      if (item + 2 < end && !Beaten<M, kIds>(order[item + 2].nearest, s.tileFar)) {
         hwy::Prefetch(order[item + 2].triangle);
         hwy::Prefetch(reinterpret_cast<const char*>(order[item + 2].triangle) + 64);
       }
