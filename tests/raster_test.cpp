@@ -335,6 +335,46 @@ TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
   EXPECT_GE(targets, 2);
 }
 
+// The SIMD vertex pass gives bit for bit transformVertex, clipOutcode and projectVertex, on
+// every instruction set: points in front of, behind and beside the camera, any count.
+TEST(Raster, VertexPassEqualsScalarOnEveryInstructionSet) {
+  std::mt19937_64 rng(79);
+  std::uniform_real_distribution<double> u(-30, 30);
+  std::vector<dvec3> points(1003);
+  for (dvec3& p : points) p = {u(rng), u(rng), u(rng)};
+  CameraSpec spec;
+  spec.eye = {3, 4, 40};
+  spec.target = {0, 0, 0};
+  spec.near = 5;
+  spec.far = 60;
+  const Camera cam = resolveCamera(spec, 640, 480, Bounds3{});
+  const dmat4 M = cam.pixelFromCamera * cam.cameraFromWorld;
+  int inside = 0;
+  const std::vector<int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  for (int64_t target : targets) {
+    hwy::SetSupportedTargetsForTest(target);
+    for (size_t count : {size_t(1), size_t(7), size_t(8), points.size()}) {
+      std::vector<HVertex> hv(count);
+      std::vector<uint8_t> codes(count);
+      std::vector<ProjectedVertex> projected(count);
+      transformVertices(points.data(), count, M, cam, hv.data(), codes.data(), projected.data());
+      const std::string what = std::string(hwy::TargetName(target)) + " count " + std::to_string(count);
+      for (size_t i = 0; i < count; ++i) {
+        const HVertex h = transformVertex(points[i], M);
+        ASSERT_EQ(std::memcmp(&h, &hv[i], sizeof h), 0) << what << " " << i;
+        ASSERT_EQ(uint32_t(codes[i]), clipOutcode(h, cam)) << what << " " << i;
+        if (codes[i]) continue;
+        const ProjectedVertex p = projectVertex(h);
+        ASSERT_EQ(std::memcmp(&p, &projected[i], sizeof p), 0) << what << " " << i;
+        inside += count == points.size() && target == targets.front();
+      }
+    }
+  }
+  hwy::SetSupportedTargetsForTest(0);
+  EXPECT_GT(inside, 200);  // some of each kind
+  EXPECT_LT(inside, 1003);
+}
+
 // The nearest bounds the batched set-up computes are bit for bit nearestStored() of the scalar
 // path (raster/fragment_depth.hpp), for every depth format, perspective and orthographic, on
 // every instruction set — and they are bounds: no covered pixel centre stores a nearer value.
@@ -358,7 +398,8 @@ TEST(Raster, BatchedNearestBoundsEqualScalarOnEveryInstructionSet) {
   const Camera cam = pixelCamera();
   const uint32_t* vertex[3] = {index[0].data(), index[1].data(), index[2].data()};
   size_t checkedFragments = 0;
-  for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
+  const std::vector<int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  for (int64_t target : targets) {
     hwy::SetSupportedTargetsForTest(target);
     for (const char* name : {"u16:z", "u16:reversed", "u16:inv", "u16:linear", "u24:z", "u24:reversed", "u24:inv",
                              "u24:linear", "u32:z", "u32:reversed", "u32:inv", "u32:linear", "f32:z", "f32:reversed",
@@ -376,7 +417,7 @@ TEST(Raster, BatchedNearestBoundsEqualScalarOnEveryInstructionSet) {
           const double scalar = nearestStored(batch[i], depth);
           ASSERT_EQ(std::memcmp(&scalar, &nearest[i], sizeof scalar), 0) << what << " " << i;
         }
-        if (target != hwy::SupportedAndGeneratedTargets()[0] || ortho) continue;
+        if (target != targets.front() || ortho) continue;
         // A bound: every covered centre of the first triangles stores nothing nearer.
         visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() {
           for (size_t i = 0; i < std::min<size_t>(batch.size(), 60); ++i) {

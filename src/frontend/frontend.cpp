@@ -26,12 +26,22 @@ double planeDistance(const HVertex& v, int plane, const Camera& cam) {
   }
 }
 
-uint32_t outcode(const HVertex& v, const Camera& cam) {
+
+}  // namespace
+
+uint32_t clipOutcode(const HVertex& v, const Camera& cam) {
   uint32_t code = 0;
   for (int p = 0; p < kPlanes; ++p)
     if (planeDistance(v, p, cam) < 0) code |= 1u << p;
   return code;
 }
+
+HVertex transformVertex(const dvec3& p, const dmat4& M) {
+  auto row = [&](int r) { return ((M[0][r] * p.x + M[1][r] * p.y) + M[2][r] * p.z) + M[3][r]; };
+  return {row(0), row(1), row(2), row(3)};
+}
+
+namespace {
 
 // Sutherland–Hodgman in homogeneous coordinates: every coordinate is linear in the world point,
 // so interpolating all four along an edge is exact.
@@ -271,7 +281,7 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
     for (int c = 0; c < 8; ++c) {
       dvec3 p{c & 1 ? b.hi.x : b.lo.x, c & 2 ? b.hi.y : b.lo.y, c & 4 ? b.hi.z : b.lo.z};
       dvec4 h = cam.toPixelH(p);
-      all &= outcode({h.x, h.y, h.z, h.w}, cam);
+      all &= clipOutcode({h.x, h.y, h.z, h.w}, cam);
     }
     if (all)
       std::fill(out.faceVisible.begin() + mesh.firstFace, out.faceVisible.begin() + mesh.firstFace + mesh.faceCount, 0);
@@ -286,12 +296,9 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
   const dmat4 pixelFromWorld = cam.pixelFromCamera * cam.cameraFromWorld;
   const size_t vertexChunks = (nv + kChunkTriangles - 1) / kChunkTriangles;
   parallelFor(0, vertexChunks, threads, [&](size_t c) {
-    for (size_t i = c * kChunkTriangles, e = std::min(nv, i + kChunkTriangles); i < e; ++i) {
-      const dvec4 h = pixelFromWorld * dvec4(scene.positions[i], 1.0);
-      out.hv[i] = {h.x, h.y, h.z, h.w};
-      out.outcodes[i] = uint8_t(outcode(out.hv[i], cam));
-      if (!out.outcodes[i]) out.projected[i] = projectVertex(out.hv[i]);
-    }
+    const size_t first = c * kChunkTriangles, count = std::min(nv, first + kChunkTriangles) - first;
+    transformVertices(scene.positions.data() + first, count, pixelFromWorld, cam, out.hv.data() + first,
+                      out.outcodes.data() + first, out.projected.data() + first);
   });
 
   // Triangles in fixed chunks, each into its own list (read in chunk order, they are the

@@ -134,6 +134,19 @@ using ChunkConsumer = std::function<void(size_t chunk)>;
 /// Projects and snaps a vertex that lies inside the clip volume.
 ProjectedVertex projectVertex(const HVertex& v);
 
+/// Homogeneous pixel coordinates of world point p: M (p, 1), each row summed as
+/// ((m0 x + m1 y) + m2 z) + m3 (M column-major, as glm stores it).
+HVertex transformVertex(const dvec3& p, const dmat4& M);
+
+/// The clipping planes (near, far, guard band) vertex v lies outside of, one bit each.
+uint32_t clipOutcode(const HVertex& v, const Camera& cam);
+
+/// The vertex pass of vertices [0, count), with SIMD (frontend/setup_batch.cpp): hv[i] =
+/// transformVertex(positions[i], M), outcodes[i] = clipOutcode(hv[i]) and, when that is 0,
+/// projected[i] = projectVertex(hv[i]) — bit for bit those functions' results.
+void transformVertices(const dvec3* positions, size_t count, const dmat4& M, const Camera& cam, HVertex* hv,
+                       uint8_t* outcodes, ProjectedVertex* projected);
+
 /// Sets up one triangle whose vertices are inside the clip volume: culls and fills `t`.
 /// Returns false, counting the reason in `counters`, when it draws nothing.
 bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, const Camera& cam, Cull cull,

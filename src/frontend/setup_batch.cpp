@@ -282,6 +282,71 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
   return written;
 }
 
+// transformVertices() (frontend.hpp): transformVertex, clipOutcode and projectVertex
+// (frontend.cpp) lane by lane, with the same IEEE operations in the same order.
+void TransformVertices(const dvec3* positions, size_t count, const dmat4& matrix, const Camera& cam, HVertex* hv,
+                       uint8_t* outcodes, ProjectedVertex* projected) {
+  static_assert(sizeof(dvec3) == 3 * sizeof(double) && sizeof(HVertex) == 4 * sizeof(double));
+  const D d;
+  const size_t N = hn::Lanes(d);
+  const hn::Rebind<int64_t, D> di;
+  V m[4][4];
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) m[c][r] = hn::Set(d, matrix[c][r]);
+  const V zero = hn::Zero(d), nearV = hn::Set(d, cam.near), farV = hn::Set(d, cam.far);
+  const V gx0 = hn::Set(d, -kGuardBandPixels), gx1 = hn::Set(d, cam.width + kGuardBandPixels);
+  const V gy0 = hn::Set(d, -kGuardBandPixels), gy1 = hn::Set(d, cam.height + kGuardBandPixels);
+  const V subpixel = hn::Set(d, double(kSubpixelOne)), half = hn::Set(d, 0.5), one = hn::Set(d, 1.0);
+  const double* in = reinterpret_cast<const double*>(positions);
+  for (size_t first = 0; first < count; first += N) {
+    const size_t lanes = std::min(N, count - first);
+    V x, y, z;
+    if (lanes == N) {
+      hn::LoadInterleaved3(d, in + 3 * first, x, y, z);
+    } else {
+      HWY_ALIGN double px[kSetupBatch], py[kSetupBatch], pz[kSetupBatch];
+      for (size_t j = 0; j < N; ++j) {
+        const dvec3& p = positions[first + std::min(j, lanes - 1)];
+        px[j] = p.x, py[j] = p.y, pz[j] = p.z;
+      }
+      x = hn::Load(d, px), y = hn::Load(d, py), z = hn::Load(d, pz);
+    }
+    auto row = [&](int r) {
+      return hn::Add(hn::Add(hn::Add(hn::Mul(m[0][r], x), hn::Mul(m[1][r], y)), hn::Mul(m[2][r], z)), m[3][r]);
+    };
+    const V hx = row(0), hy = row(1), depth = row(2), w = row(3);
+    // planeDistance(v, p) < 0 for the six planes, in clipOutcode's bit order.
+    const M outside[6] = {hn::Lt(hn::Sub(depth, nearV), zero),      hn::Lt(hn::Sub(farV, depth), zero),
+                          hn::Lt(hn::Sub(hx, hn::Mul(gx0, w)), zero), hn::Lt(hn::Sub(hn::Mul(gx1, w), hx), zero),
+                          hn::Lt(hn::Sub(hy, hn::Mul(gy0, w)), zero), hn::Lt(hn::Sub(hn::Mul(gy1, w), hy), zero)};
+    // projectVertex: every lane (those outside are not stored).
+    const V sx = hn::Div(hx, w), sy = hn::Div(hy, w);
+    const V X = hn::Floor(hn::Add(hn::Mul(sx, subpixel), half)), Y = hn::Floor(hn::Add(hn::Mul(sy, subpixel), half));
+    const V num = hn::Div(depth, w), den = hn::Div(one, w);
+    if (lanes == N) {
+      hn::StoreInterleaved4(hx, hy, depth, w, d, reinterpret_cast<double*>(hv + first));
+    } else {
+      HWY_ALIGN double l[4][kSetupBatch];
+      hn::Store(hx, d, l[0]), hn::Store(hy, d, l[1]), hn::Store(depth, d, l[2]), hn::Store(w, d, l[3]);
+      for (size_t j = 0; j < lanes; ++j) hv[first + j] = {l[0][j], l[1][j], l[2][j], l[3][j]};
+    }
+    uint8_t bits[6][8] = {};
+    for (int p = 0; p < 6; ++p) hn::StoreMaskBits(d, outside[p], bits[p]);
+    HWY_ALIGN double l[6][kSetupBatch];
+    HWY_ALIGN int64_t li[2][kSetupBatch];
+    hn::Store(sx, d, l[0]), hn::Store(sy, d, l[1]), hn::Store(num, d, l[4]), hn::Store(den, d, l[5]);
+    // In the clip volume |X|, |Y| < 2^23 (the guard band): the conversion is exact. Elsewhere
+    // the value is not used.
+    hn::Store(hn::ConvertTo(di, X), di, li[0]), hn::Store(hn::ConvertTo(di, Y), di, li[1]);
+    for (size_t j = 0; j < lanes; ++j) {
+      uint8_t code = 0;
+      for (int p = 0; p < 6; ++p) code |= uint8_t(((bits[p][0] >> j) & 1) << p);
+      outcodes[first + j] = code;
+      if (!code) projected[first + j] = {l[0][j], l[1][j], li[0][j], li[1][j], l[4][j], l[5][j]};
+    }
+  }
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace hsr
 HWY_AFTER_NAMESPACE();
@@ -289,6 +354,12 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace hsr {
 HWY_EXPORT(SetupBatch);
+HWY_EXPORT(TransformVertices);
+
+void transformVertices(const dvec3* positions, size_t count, const dmat4& M, const Camera& cam, HVertex* hv,
+                       uint8_t* outcodes, ProjectedVertex* projected) {
+  HWY_DYNAMIC_DISPATCH(TransformVertices)(positions, count, M, cam, hv, outcodes, projected);
+}
 
 size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
                   const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
