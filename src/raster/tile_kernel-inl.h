@@ -338,6 +338,16 @@ void RasterizeTileT(const TileJob& job) {
       // Small triangles (a box of at most kSmallPixels centres, most of a million-triangle
       // mesh): pixel by pixel in scalar code, with the same operations as the lanes below.
       if ((rx1 - rx0 + 1) * (ry1 - ry0 + 1) <= kSmallPixels) {
+        // Behind everything stored in the (1 to 4) blocks its box touches: nothing to do (the
+        // blocks' farthest values may be stale, still bounds).
+        bool beaten = true;
+        for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
+          for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx)
+            beaten &= Beaten<M, kIds>(qNear, s.blockFar[by * kBlocksX + bx]);
+        if (beaten) {
+          if constexpr (kCountBlocks) ++count.blocksCulled;
+          continue;
+        }
         for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
           for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx)
             if (s.blockKey[by * kBlocksX + bx]) MaterializeBlock<S, M, kIds>(job, tf, by * kBlocksX + bx);
