@@ -1,16 +1,19 @@
 // The SIMD tile kernel of the tiled rasterizer, written once against Highway and compiled per
 // instruction set by raster/tiled.cpp (foreach_target; one function exported, dispatched at run
-// time). RasterizeTile() runs the triangles binned to one tile, in submission order, through
+// time). RasterizeTile() runs the triangles binned to one tile, nearest first (orderTile), through
 // the tile's depth and triangle buffers (TileScratch); it runs on whichever worker owns the tile.
 //
 // One vector holds up to 8 double lanes, one row of an 8x8 block (AVX-512: one vector per row,
 // AVX2: two, SSE4: four, scalar: eight). Every lane repeats the reference's arithmetic exactly:
 //  - coverage: the integer edge functions of raster/edge.hpp, exact in double (|E| < 2^50);
 //  - depth: ((a*X + b*Y) + c) for the planes P and Q of raster/fragment_depth.hpp, their
-//    quotient, std::clamp and quantizeDepth<S> — the same IEEE operations in the same order as
-//    fragmentStored<S>, which the reference (zbuffer.cpp with halfspace.hpp) calls, never fused
-//    (no MulAdd here; tiled.cpp is built with -ffp-contract=off);
-//  - depth test: strictly nearer wins, so ties keep the triangle drawn first.
+//    quotient (none when Q is 1: MappedPlanes::affine), std::clamp and quantizeDepth<S> — the
+//    same IEEE operations in the same order as fragmentStored<S>, which the reference
+//    (zbuffer.cpp with halfspace.hpp) calls, never fused (no MulAdd here; tiled.cpp is built
+//    with -ffp-contract=off);
+//  - depth test: strictly nearer wins, or equal with the lower triangleKey (submitted first),
+//    so the visit order does not matter: per pixel the nearest value and, among equals, the
+//    first submitted triangle — what the reference leaves drawing in submission order.
 // Hence stored values and winners are bit-identical to the scalar reference.
 
 // Per-target include guard (Highway's pattern: this file is included once per target).
