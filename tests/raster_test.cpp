@@ -277,26 +277,42 @@ TEST(Raster, DepthIsPerspectiveCorrect) {
 // The batched SIMD set-up gives bit for bit the scalar set-up's triangles and counts, on every
 // instruction set: random triangles of every size, degenerate ones, slivers, off-screen ones,
 // tiny ones covering no pixel centre, both cull modes.
-TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
-  std::mt19937_64 rng(77);
-  std::uniform_real_distribution<double> depthDist(0.6, 90);
+// Random triangles for the set-up tests, projected: `count` of them over the image and a margin,
+// each reshaped by shape(i, p), at random depths; triangle i has face 7 i.
+struct ProjectedSoup {
   std::vector<ProjectedVertex> vertices;
   std::vector<uint32_t> index[3];
-  for (int i = 0; i < 3000; ++i) {
+  std::vector<uint32_t> tri, face;
+};
+
+template <class Shape>
+ProjectedSoup projectedSoup(uint64_t seed, int count, Shape&& shape) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> depthDist(0.6, 90);
+  ProjectedSoup soup;
+  for (int i = 0; i < count; ++i) {
     dvec2 p[3];
-    const int kind = i % 6;
     for (int k = 0; k < 3; ++k) p[k] = {randomCoord(rng, -40, W + 40), randomCoord(rng, -40, H + 40)};
+    shape(i, p);
+    for (int k = 0; k < 3; ++k) {
+      const double z = depthDist(rng);
+      soup.index[k].push_back(uint32_t(soup.vertices.size()));
+      soup.vertices.push_back(projectVertex({p[k].x * z, p[k].y * z, z, z}));
+    }
+    soup.tri.push_back(uint32_t(i));
+    soup.face.push_back(uint32_t(7 * i));
+  }
+  return soup;
+}
+
+TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
+  const ProjectedSoup soup = projectedSoup(77, 3000, [](int i, dvec2* p) {
+    const int kind = i % 6;
     if (kind == 1) p[1] = p[0] + dvec2(0.3, 0.2), p[2] = p[0] + dvec2(-0.2, 0.4);  // tiny
     if (kind == 2) p[2] = p[1];                                                 // degenerate
     if (kind == 3) p[2] = p[0] + (p[1] - p[0]) * 0.5 + dvec2(0, 0.01);          // sliver
-    for (int k = 0; k < 3; ++k) {
-      const double z = depthDist(rng);
-      index[k].push_back(uint32_t(vertices.size()));
-      vertices.push_back(projectVertex({p[k].x * z, p[k].y * z, z, z}));
-    }
-  }
-  std::vector<uint32_t> tri(vertices.size() / 3), face(tri.size());
-  for (size_t i = 0; i < tri.size(); ++i) tri[i] = uint32_t(i), face[i] = uint32_t(7 * i);
+  });
+  const auto& [vertices, index, tri, face] = soup;
   const Camera cam = pixelCamera();
   int targets = 0;
   for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
@@ -379,22 +395,10 @@ TEST(Raster, VertexPassEqualsScalarOnEveryInstructionSet) {
 // path (raster/fragment_depth.hpp), for every depth format, perspective and orthographic, on
 // every instruction set — and they are bounds: no covered pixel centre stores a nearer value.
 TEST(Raster, BatchedNearestBoundsEqualScalarOnEveryInstructionSet) {
-  std::mt19937_64 rng(78);
-  std::uniform_real_distribution<double> depthDist(0.6, 90);
-  std::vector<ProjectedVertex> vertices;
-  std::vector<uint32_t> index[3];
-  for (int i = 0; i < 900; ++i) {
-    dvec2 p[3];
-    for (int k = 0; k < 3; ++k) p[k] = {randomCoord(rng, -40, W + 40), randomCoord(rng, -40, H + 40)};
+  const ProjectedSoup soup = projectedSoup(78, 900, [](int i, dvec2* p) {
     if (i % 3 == 1) p[1] = p[0] + dvec2(2.3, 0.2), p[2] = p[0] + dvec2(-0.2, 3.4);  // small
-    for (int k = 0; k < 3; ++k) {
-      const double z = depthDist(rng);
-      index[k].push_back(uint32_t(vertices.size()));
-      vertices.push_back(projectVertex({p[k].x * z, p[k].y * z, z, z}));
-    }
-  }
-  std::vector<uint32_t> tri(vertices.size() / 3), face(tri.size());
-  for (size_t i = 0; i < tri.size(); ++i) tri[i] = uint32_t(i), face[i] = uint32_t(i);
+  });
+  const auto& [vertices, index, tri, face] = soup;
   const Camera cam = pixelCamera();
   const uint32_t* vertex[3] = {index[0].data(), index[1].data(), index[2].data()};
   size_t checkedFragments = 0;
