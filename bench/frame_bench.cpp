@@ -87,11 +87,12 @@ void BM_RasterTiles(benchmark::State& state) {
   tiled::Bins bins;
   binAll(fe, bins);
   auto scratch = std::make_unique<tiled::TileScratch>();
+  tiled::TileOrder order;
   tiled::RasterCounters counters;
   for (auto _ : state) {
     counters = {};
     for (int tile = 0; tile < bins.tileCount(); ++tile)
-      if (bins.entries(tile)) tiled::rasterizeTile(bins, tile, depth, true, *scratch, counters);
+      if (bins.entries(tile)) tiled::rasterizeTile(bins, tile, depth, true, *scratch, order, counters);
   }
   state.SetLabel(std::string(kScenes[state.range(0)]) + " " + kFormats[state.range(1)]);
   state.counters["tests"] = double(counters.depthTests);

@@ -366,10 +366,11 @@ TEST(Tiled, TrianglesInFrontOfAWholeTileReplaceIt) {
     tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
     for (size_t c = 0; c < fe.chunkCount; ++c) tiled::binChunk(bins, c, fe.chunks[c]);
     auto scratch = std::make_unique<tiled::TileScratch>();
+    tiled::TileOrder lists;
     tiled::RasterCounters counters;
     int planeTiles = 0;
     for (int tile = 0; tile < bins.tileCount(); ++tile) {
-      tiled::rasterizeTile(bins, tile, depth, true, *scratch, counters);
+      tiled::rasterizeTile(bins, tile, depth, true, *scratch, lists, counters);
       planeTiles += scratch->state == tiled::TileState::Plane;
     }
     EXPECT_GT(planeTiles, 0) << order;
@@ -412,10 +413,11 @@ TEST(Tiled, EqualDepthGoesToTheTriangleSubmittedFirstWhateverTheVisitOrder) {
     auto scratch = std::make_unique<tiled::TileScratch>();
     tiled::RasterCounters counters;
     ASSERT_EQ(bins.tileCount(), 1);
-    const std::vector<tiled::TileEntry>& order = tiled::orderTile(bins, 0, greater, *scratch);
+    tiled::TileOrder lists;
+    const std::vector<tiled::TileEntry>& order = tiled::orderTile(bins, 0, greater, lists);
     ASSERT_EQ(order.size(), 2u);
     EXPECT_EQ(order[0].key, tiled::triangleKey(0, 1)) << f;  // the second triangle first
-    tiled::rasterizeTile(bins, 0, depth, true, *scratch, counters);
+    tiled::rasterizeTile(bins, 0, depth, true, *scratch, lists, counters);
     size_t covered = 0;
     for (int y = 0; y < cam.height; ++y)
       for (int x = 0; x < cam.width; ++x) {

@@ -100,6 +100,7 @@ struct TiledState {
   FrontEndOutput fe;
   tiled::Bins bins;
   std::vector<tiled::TileScratch> scratch;
+  std::vector<tiled::TileOrder> orders;  // per worker
   std::vector<tiled::RasterCounters> counters;  // per tile
   std::vector<uint64_t> covered;                // per tile
 };
@@ -134,11 +135,8 @@ void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const Triangle
   }
   const int workers = int(std::clamp<size_t>(work / kWorkPerThread, 1, size_t(threads)));
   if (state.scratch.size() < size_t(workers) * kSegmentTiles) state.scratch.resize(size_t(workers) * kSegmentTiles);
-  for (tiled::TileScratch& scratch : state.scratch) {  // any worker may meet the fullest tile
-    scratch.entries.reserve(mostEntries);
-    scratch.ordered.reserve(mostEntries);
-    scratch.bucket.reserve(mostEntries);
-  }
+  if (state.orders.size() < size_t(workers)) state.orders.resize(size_t(workers));
+  for (tiled::TileOrder& order : state.orders) order.reserve(mostEntries);  // any worker may meet the fullest tile
   state.counters.assign(size_t(bins.tileCount()), {});
   state.covered.assign(size_t(bins.tileCount()), 0);
   const bool ids = opt.outputs != FrameOutputs::DepthOnly;
@@ -149,7 +147,8 @@ void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const Triangle
       const int ty = int(seg) / segmentsX, tx0 = (int(seg) % segmentsX) * kSegmentTiles;
       const int count = std::min(kSegmentTiles, bins.tilesX - tx0), first = ty * bins.tilesX + tx0;
       for (int i = 0; i < count; ++i)
-        tiled::rasterizeTile(bins, first + i, depth, ids, scratch[i], state.counters[size_t(first + i)]);
+        tiled::rasterizeTile(bins, first + i, depth, ids, scratch[i], state.orders[worker],
+                             state.counters[size_t(first + i)]);
       for (int row = 0; row < tiled::kTileSize; row += kResolveBand)
         for (int i = 0; i < count; ++i)
           state.covered[size_t(first + i)] += tiled::resolveTile(bins, first + i, depth, opt.outputs, &shade,
@@ -193,9 +192,7 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
     bufferBytes = state.bins.memoryBytes() + state.scratch.size() * sizeof(tiled::TileScratch) +
                   state.counters.capacity() * sizeof(tiled::RasterCounters) +
                   state.covered.capacity() * sizeof(uint64_t);
-    for (const tiled::TileScratch& scratch : state.scratch)
-      bufferBytes += (scratch.entries.capacity() + scratch.ordered.capacity()) * sizeof(tiled::TileEntry) +
-                     scratch.bucket.capacity();
+    for (const tiled::TileOrder& order : state.orders) bufferBytes += order.memoryBytes();
   } else {
     runFrontEnd(scene, cam, opt, fe);
     const std::vector<SetupTriangle> tris = fe.flatten();

@@ -257,7 +257,7 @@ void RasterizeTileT(const TileJob& job) {
   unsigned sinceRefresh = 0;
 
   // The tile's triangles, roughly nearest first (orderTile): any order gives the same image.
-  const std::vector<TileEntry>& order = orderTile(bins, job.tile, kGreater, s);
+  const std::vector<TileEntry>& order = orderTile(bins, job.tile, kGreater, *job.order);
   {
     for (size_t item = 0, end = order.size(); item < end; ++item) {
       const SetupTriangle& t = *order[item].triangle;

@@ -122,9 +122,19 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles) {
   cb.start[0] = 0;
 }
 
-const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater, TileScratch& scratch) {
-  std::vector<TileEntry>& in = scratch.entries;
-  std::vector<TileEntry>& out = scratch.ordered;
+void TileOrder::reserve(size_t n) {
+  entries.reserve(n);
+  ordered.reserve(n);
+  bucket.reserve(n);
+}
+
+uint64_t TileOrder::memoryBytes() const {
+  return (entries.capacity() + ordered.capacity()) * sizeof(TileEntry) + bucket.capacity();
+}
+
+const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater, TileOrder& order) {
+  std::vector<TileEntry>& in = order.entries;
+  std::vector<TileEntry>& out = order.ordered;
   in.resize(bins.entries(tile));  // (capacity reserved by the caller: no allocation once warm)
   TileEntry* entry = in.data();
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
@@ -148,8 +158,8 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater
   const double scale = (kBuckets - 0.5) / (hi - lo), origin = greater ? hi : lo;
   const double sign = greater ? -scale : scale;  // rank = (v - origin) * sign, in [0, kBuckets)
   uint32_t start[kBuckets + 1] = {};
-  scratch.bucket.resize(in.size());
-  uint8_t* bucket = scratch.bucket.data();
+  order.bucket.resize(in.size());
+  uint8_t* bucket = order.bucket.data();
   for (size_t i = 0; i < in.size(); ++i) {
     bucket[i] = uint8_t((in[i].nearest - origin) * sign);
     ++start[bucket[i] + 1];
@@ -161,15 +171,15 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater
 }
 
 void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids, TileScratch& scratch,
-                   RasterCounters& counters) {
-  const TileJob job{&bins, tile, depth, ids, &scratch, &counters, nullptr};
+                   TileOrder& order, RasterCounters& counters) {
+  const TileJob job{&bins, tile, depth, ids, &scratch, &counters, nullptr, &order};
   HWY_DYNAMIC_DISPATCH(RasterizeTile)(job);
 }
 
 uint64_t resolveTile(const Bins& bins, int tile, const DepthSetup& depth, FrameOutputs outputs,
                      const TriangleShader* shader, Rgba8 background, const TileScratch& scratch, Frame& frame,
                      int rowBegin, int rowEnd) {
-  const TileJob job{&bins, tile, depth, outputs != FrameOutputs::DepthOnly, nullptr, nullptr, shader};
+  const TileJob job{&bins, tile, depth, outputs != FrameOutputs::DepthOnly, nullptr, nullptr, shader, nullptr};
   return HWY_DYNAMIC_DISPATCH(ResolveTile)(job, scratch, outputs, background, rowBegin, rowEnd, frame);
 }
 

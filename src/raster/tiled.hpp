@@ -128,20 +128,27 @@ struct alignas(64) TileScratch {
   TileState state;
   const SetupTriangle* plane;  // state Plane: the triangle, and its key
   uint64_t planeKey;
-  std::vector<TileEntry> entries, ordered;  // orderTile()'s lists
+};
+
+/// A worker's lists for orderTile(), reused tile after tile (one per worker, not per tile: a
+/// tile's list can hold every triangle of the frame).
+struct TileOrder {
+  std::vector<TileEntry> entries, ordered;
   std::vector<uint8_t> bucket;
+  void reserve(size_t n);
+  uint64_t memoryBytes() const;
 };
 
 /// The triangles binned to `tile`, roughly nearest first (a stable bucket sort of their nearest
 /// bounds: `greater` = larger stored values are nearer; in submission order when a bound is not
-/// finite), in `scratch.ordered` or `scratch.entries`, which it returns.
+/// finite), in `order.ordered` or `order.entries`, which it returns.
 /// The kernel's depth test makes the order free: a fragment wins when it is strictly nearer
 /// than the stored value, or equal to it and its triangle was submitted first (triangleKey) —
 /// per pixel, the nearest fragment and, among equals, the first submitted: the image the z-buffer
 /// draws in submission order, bit for bit. Nearest first, the tiles' and blocks' farthest depths
 /// reject most hidden triangles before their pixels are visited (the front-to-back + z-buffer
 /// combination of documents 000/001, per tile).
-const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater, TileScratch& scratch);
+const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater, TileOrder& order);
 
 /// Binning, in two steps: prepareBins() sizes the bins for a width x height image and
 /// `chunkCount` front-end chunks; binChunk(c) sorts chunk c's triangles into its own lists (the
@@ -151,10 +158,11 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater
 void prepareBins(Bins& bins, int width, int height, size_t chunkCount);
 void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles);
 
-/// Rasterizes every triangle binned to `tile` into `scratch` (cleared first). With ids false,
-/// only depth is kept (no triangle ids). Adds to `counters`.
+/// Rasterizes every triangle binned to `tile` into `scratch` (cleared first), visiting them in
+/// orderTile's order (lists in `order`). With ids false, only depth is kept (no triangle ids).
+/// Adds to `counters`.
 void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids, TileScratch& scratch,
-                   RasterCounters& counters);
+                   TileOrder& order, RasterCounters& counters);
 
 /// Writes every pixel of the tile of `scratch` into `frame` as `outputs` asks: ids, eye depth
 /// of the winning triangle's plane at the pixel centre (exactly as the reference resolves it),
@@ -179,6 +187,7 @@ struct TileJob {
   TileScratch* scratch;
   RasterCounters* counters;
   const TriangleShader* shader;  // resolving colour only
+  TileOrder* order;              // rasterizing only
 };
 
 /// Name of the instruction set the kernel dispatches to on this machine (e.g. "AVX3").
