@@ -27,22 +27,6 @@ double planeDistance(const HVertex& v, int plane, const Camera& cam) {
 }
 
 
-}  // namespace
-
-uint32_t clipOutcode(const HVertex& v, const Camera& cam) {
-  uint32_t code = 0;
-  for (int p = 0; p < kPlanes; ++p)
-    if (planeDistance(v, p, cam) < 0) code |= 1u << p;
-  return code;
-}
-
-HVertex transformVertex(const dvec3& p, const dmat4& M) {
-  auto row = [&](int r) { return ((M[0][r] * p.x + M[1][r] * p.y) + M[2][r] * p.z) + M[3][r]; };
-  return {row(0), row(1), row(2), row(3)};
-}
-
-namespace {
-
 // Sutherland–Hodgman in homogeneous coordinates: every coordinate is linear in the world point,
 // so interpolating all four along an edge is exact.
 int clipPolygon(HVertex* poly, int count, uint32_t planes, const Camera& cam, HVertex* scratch) {
@@ -82,6 +66,18 @@ void planesThrough(const double* x, const double* y, const double* v, const doub
 }
 
 }  // namespace
+
+uint32_t clipOutcode(const HVertex& v, const Camera& cam) {
+  uint32_t code = 0;
+  for (int p = 0; p < kPlanes; ++p)
+    if (planeDistance(v, p, cam) < 0) code |= 1u << p;
+  return code;
+}
+
+HVertex transformVertex(const dvec3& p, const dmat4& M) {
+  auto row = [&](int r) { return ((M[0][r] * p.x + M[1][r] * p.y) + M[2][r] * p.z) + M[3][r]; };
+  return {row(0), row(1), row(2), row(3)};
+}
 
 ProjectedVertex projectVertex(const HVertex& v) {
   ProjectedVertex p;

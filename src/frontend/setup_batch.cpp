@@ -71,17 +71,15 @@ HWY_INLINE V NearestStored(const DepthSetup& depth, const PlaneV& N, const Plane
       P = Combine(1, N, -n, Dn);
       Q = Scale(range, Dn);
   }
-  M constant;
-  {  // normalize(): a constant Q divides P once, and becomes 1
-    constant = hn::And(hn::And(hn::Eq(Q.a, hn::Zero(d)), hn::Eq(Q.b, hn::Zero(d))),
-                               hn::And(hn::Ge(Q.c, hn::Set(d, std::numeric_limits<double>::min())),
-                                       hn::Le(Q.c, hn::Set(d, std::numeric_limits<double>::max()))));
-    const V r = hn::Div(hn::Set(d, 1.0), Q.c);
-    P = {hn::IfThenElse(constant, hn::Mul(P.a, r), P.a), hn::IfThenElse(constant, hn::Mul(P.b, r), P.b),
-         hn::IfThenElse(constant, hn::Mul(P.c, r), P.c)};
-    Q = {hn::IfThenElseZero(hn::Not(constant), Q.a), hn::IfThenElseZero(hn::Not(constant), Q.b),
-         hn::IfThenElse(constant, hn::Set(d, 1.0), Q.c)};
-  }
+  // normalize(): a constant Q divides P once, and becomes 1.
+  const M constant = hn::And(hn::And(hn::Eq(Q.a, hn::Zero(d)), hn::Eq(Q.b, hn::Zero(d))),
+                             hn::And(hn::Ge(Q.c, hn::Set(d, std::numeric_limits<double>::min())),
+                                     hn::Le(Q.c, hn::Set(d, std::numeric_limits<double>::max()))));
+  const V r = hn::Div(hn::Set(d, 1.0), Q.c);
+  P = {hn::IfThenElse(constant, hn::Mul(P.a, r), P.a), hn::IfThenElse(constant, hn::Mul(P.b, r), P.b),
+       hn::IfThenElse(constant, hn::Mul(P.c, r), P.c)};
+  Q = {hn::IfThenElseZero(hn::Not(constant), Q.a), hn::IfThenElseZero(hn::Not(constant), Q.b),
+       hn::IfThenElse(constant, hn::Set(d, 1.0), Q.c)};
   const bool greater = mapping == DepthMapping::Reversed || mapping == DepthMapping::Inv;
   const double inf = std::numeric_limits<double>::infinity();
   V maxX = hn::Zero(d), maxY = hn::Zero(d);
@@ -123,11 +121,14 @@ HWY_INLINE V NearestStored(const DepthSetup& depth, const PlaneV& N, const Plane
   // std::clamp(v, 0, 1), then quantizeDepth of the storage (as a double).
   const V zero = hn::Zero(d), one = hn::Set(d, 1.0);
   v = hn::IfThenElse(hn::Lt(v, zero), zero, hn::IfThenElse(hn::Lt(one, v), one, v));
-  switch (depth.format.storage) {
-    case DepthStorage::F32: v = hn::PromoteTo(d, hn::DemoteTo(hn::Rebind<float, D>(), v)); break;
-    case DepthStorage::U16: v = hn::Floor(hn::Add(hn::Mul(v, hn::Set(d, kDepthScale<DepthStorage::U16>)), hn::Set(d, 0.5))); break;
-    case DepthStorage::U24: v = hn::Floor(hn::Add(hn::Mul(v, hn::Set(d, kDepthScale<DepthStorage::U24>)), hn::Set(d, 0.5))); break;
-    case DepthStorage::U32: v = hn::Floor(hn::Add(hn::Mul(v, hn::Set(d, kDepthScale<DepthStorage::U32>)), hn::Set(d, 0.5))); break;
+  const DepthStorage storage = depth.format.storage;
+  if (storage == DepthStorage::F32) {
+    v = hn::PromoteTo(d, hn::DemoteTo(hn::Rebind<float, D>(), v));
+  } else {  // v * scale + 0.5, truncated (v >= 0: floor)
+    const double scale = storage == DepthStorage::U16   ? kDepthScale<DepthStorage::U16>
+                         : storage == DepthStorage::U24 ? kDepthScale<DepthStorage::U24>
+                                                        : kDepthScale<DepthStorage::U32>;
+    v = hn::Floor(hn::Add(hn::Mul(v, hn::Set(d, scale)), hn::Set(d, 0.5)));
   }
   return hn::IfThenElse(bounded, v, hn::Set(d, greater ? inf : -inf));
 }

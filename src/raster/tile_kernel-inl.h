@@ -258,252 +258,250 @@ void RasterizeTileT(const TileJob& job) {
 
   // The tile's triangles, roughly nearest first (orderTile): any order gives the same image.
   const std::vector<TileEntry>& order = orderTile(bins, job.tile, kGreater, *job.order);
-  {
-    for (size_t item = 0, end = order.size(); item < end; ++item) {
-      const SetupTriangle& t = *order[item].triangle;
-      // The records are scattered over the chunks: fetch ahead those of triangles the tile's
-      // bound does not reject already (nearest first, most hidden ones are rejected unread).
-      if (item + 2 < end && !Beaten<M, kIds>(order[item + 2].nearest, s.tileFar)) {
-        hwy::Prefetch(order[item + 2].triangle);
-        hwy::Prefetch(reinterpret_cast<const char*>(order[item + 2].triangle) + 64);
-      }
-      const uint64_t key = order[item].key;
-      // Early rejection: the triangle's nearest possible value is farther than the farthest
-      // value stored in the tile (or, without ids, not nearer), so none of its fragments can
-      // win here.
-      const double qNear = order[item].nearest;
-      // Blocks small triangles wrote to: their farthest values, again, every 16 triangles (a
-      // stale value is still a valid bound: writes only bring stored values nearer).
-      if (dirtyBlocks && (++sinceRefresh & 15) == 0) {
-        for (uint64_t bits = dirtyBlocks; bits; bits &= bits - 1) {
-          const int b = hwy::Num0BitsBelowLS1Bit_Nonzero64(bits);
-          const size_t first = size_t(b / kBlocksX) * kBlockSize * kTileSize + size_t(b % kBlocksX) * kBlockSize;
-          V far = nearestV;
-          for (int y = 0; y < kBlockSize; ++y)
-            for (size_t k = 0; k < size_t(kBlockSize); k += N)
-              far = Farther<kGreater>(far, hn::Load(d, s.depth + first + size_t(y) * kTileSize + k));
-          s.blockFar[b] = FarthestLane<kGreater>(far);
-        }
-        dirtyBlocks = 0;
-        s.tileFarStale = true;
-      }
-      if (s.tileFarStale) {  // the farthest of the blocks' farthest values
+  for (size_t item = 0, end = order.size(); item < end; ++item) {
+    const SetupTriangle& t = *order[item].triangle;
+    // The records are scattered over the chunks: fetch ahead those of triangles the tile's
+    // bound does not reject already (nearest first, most hidden ones are rejected unread).
+    if (item + 2 < end && !Beaten<M, kIds>(order[item + 2].nearest, s.tileFar)) {
+      hwy::Prefetch(order[item + 2].triangle);
+      hwy::Prefetch(reinterpret_cast<const char*>(order[item + 2].triangle) + 64);
+    }
+    const uint64_t key = order[item].key;
+    // Early rejection: the triangle's nearest possible value is farther than the farthest
+    // value stored in the tile (or, without ids, not nearer), so none of its fragments can
+    // win here.
+    const double qNear = order[item].nearest;
+    // Blocks small triangles wrote to: their farthest values, again, every 16 triangles (a
+    // stale value is still a valid bound: writes only bring stored values nearer).
+    if (dirtyBlocks && (++sinceRefresh & 15) == 0) {
+      for (uint64_t bits = dirtyBlocks; bits; bits &= bits - 1) {
+        const int b = hwy::Num0BitsBelowLS1Bit_Nonzero64(bits);
+        const size_t first = size_t(b / kBlocksX) * kBlockSize * kTileSize + size_t(b % kBlocksX) * kBlockSize;
         V far = nearestV;
-        for (size_t b = 0; b < size_t(kBlocksPerTile); b += N) far = Farther<kGreater>(far, hn::Load(d, s.blockFar + b));
-        s.tileFar = FarthestLane<kGreater>(far);
-        s.tileFarStale = false;
+        for (int y = 0; y < kBlockSize; ++y)
+          for (size_t k = 0; k < size_t(kBlockSize); k += N)
+            far = Farther<kGreater>(far, hn::Load(d, s.depth + first + size_t(y) * kTileSize + k));
+        s.blockFar[b] = FarthestLane<kGreater>(far);
       }
-      if (Beaten<M, kIds>(qNear, s.tileFar)) {
-        ++count.culledTiles;
+      dirtyBlocks = 0;
+      s.tileFarStale = true;
+    }
+    if (s.tileFarStale) {  // the farthest of the blocks' farthest values
+      V far = nearestV;
+      for (size_t b = 0; b < size_t(kBlocksPerTile); b += N) far = Farther<kGreater>(far, hn::Load(d, s.blockFar + b));
+      s.tileFar = FarthestLane<kGreater>(far);
+      s.tileFarStale = false;
+    }
+    if (Beaten<M, kIds>(qNear, s.tileFar)) {
+      ++count.culledTiles;
+      continue;
+    }
+    const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
+    const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, n, f, ortho);
+
+    // Whole tile: the triangle covers every pixel centre of the tile (its four corner centres;
+    // coverage is convex) and its farthest value is nearer than the nearest stored: it wins
+    // every pixel, and the tile becomes its plane, in O(1) ("lossless z-buffer compression").
+    if (t.minX <= x0 && t.maxX >= x0 + w - 1 && t.minY <= y0 && t.maxY >= y0 + h - 1) {
+      bool covers = true;
+      for (const Edge& edge : e)
+        for (int c = 0; c < 4; ++c) covers &= edge.at(cornerX[c & 1], cornerY[c >> 1]) >= edge.bias;
+      if (covers) {
+        const StoredRange r = storedRange<S, M>(m, rectX, rectY, 4);
+        if (storedNearer<M>(r.farthest, s.tileNear)) {
+          s.state = TileState::Plane;
+          s.plane = &t;
+          s.planeKey = key;
+          s.tileFar = r.farthest;
+          s.tileNear = r.nearest;
+          s.tileFarStale = false;
+          dirtyBlocks = 0;  // the pixel buffers are no longer the tile's values
+          tests += uint64_t(w) * uint64_t(h);
+          writes += uint64_t(w) * uint64_t(h);
+          ++count.tilesWhole;
+          continue;
+        }
+      }
+    }
+    if (s.state != TileState::Pixels) {
+      Materialize<S, M, kIds>(job, tf);
+      dirtyBlocks = 0;
+    }
+
+    // The triangle's pixel box within the tile, tile-local and inclusive.
+    const int rx0 = std::max(t.minX - x0, 0), rx1 = std::min(t.maxX - x0, w - 1);
+    const int ry0 = std::max(t.minY - y0, 0), ry1 = std::min(t.maxY - y0, h - 1);
+    V laneE[3], biasV[3];
+    for (int i = 0; i < 3; ++i) {
+      laneE[i] = hn::Mul(lane, hn::Set(d, double(e[i].stepX())));  // lane j: j * stepX, exact
+      biasV[i] = hn::Set(d, double(e[i].bias));
+    }
+
+    // Small triangles (a box of at most kSmallPixels centres, most of a million-triangle
+    // mesh): pixel by pixel in scalar code, with the same operations as the lanes below.
+    if ((rx1 - rx0 + 1) * (ry1 - ry0 + 1) <= kSmallPixels) {
+      // Behind everything stored in the (1 to 4) blocks its box touches: nothing to do (the
+      // blocks' farthest values may be stale, still bounds).
+      bool beaten = true;
+      for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
+        for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx)
+          beaten &= Beaten<M, kIds>(qNear, s.blockFar[by * kBlocksX + bx]);
+      if (beaten) {
+        if constexpr (kCountBlocks) ++count.blocksCulled;
         continue;
       }
-      const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
-      const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, n, f, ortho);
-
-      // Whole tile: the triangle covers every pixel centre of the tile (its four corner centres;
-      // coverage is convex) and its farthest value is nearer than the nearest stored: it wins
-      // every pixel, and the tile becomes its plane, in O(1) ("lossless z-buffer compression").
-      if (t.minX <= x0 && t.maxX >= x0 + w - 1 && t.minY <= y0 && t.maxY >= y0 + h - 1) {
-        bool covers = true;
-        for (const Edge& edge : e)
-          for (int c = 0; c < 4; ++c) covers &= edge.at(cornerX[c & 1], cornerY[c >> 1]) >= edge.bias;
-        if (covers) {
-          const StoredRange r = storedRange<S, M>(m, rectX, rectY, 4);
-          if (storedNearer<M>(r.farthest, s.tileNear)) {
-            s.state = TileState::Plane;
-            s.plane = &t;
-            s.planeKey = key;
-            s.tileFar = r.farthest;
-            s.tileNear = r.nearest;
-            s.tileFarStale = false;
-            dirtyBlocks = 0;  // the pixel buffers are no longer the tile's values
-            tests += uint64_t(w) * uint64_t(h);
-            writes += uint64_t(w) * uint64_t(h);
-            ++count.tilesWhole;
-            continue;
+      for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
+        for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx)
+          if (s.blockKey[by * kBlocksX + bx]) MaterializeBlock<S, M, kIds>(job, tf, by * kBlocksX + bx);
+      int64_t rowE[3];
+      for (int i = 0; i < 3; ++i) rowE[i] = e[i].at(centerFixed(x0 + rx0), centerFixed(y0 + ry0));
+      for (int y = ry0; y <= ry1; ++y) {
+        const double Y = double(y0 + y) + 0.5, pRow = m.p.b * Y, qRow = m.q.b * Y;
+        int64_t E[3] = {rowE[0], rowE[1], rowE[2]};
+        for (int x = rx0; x <= rx1; ++x) {
+          if (E[0] >= e[0].bias && E[1] >= e[1].bias && E[2] >= e[2].bias) {
+            const size_t at = size_t(y) * kTileSize + size_t(x);
+            const double stored = s.depth[at];
+            if (!Beaten<M, kIds>(qNear, stored)) {
+              const double z = fragmentStored<S>(m, double(x) + (double(x0) + 0.5), pRow, qRow);
+              ++tests;
+              if (storedNearer<M>(z, stored) || (kIds && z == stored && key < s.triangle[at])) {
+                ++writes;
+                s.depth[at] = z;
+                if constexpr (kIds) s.triangle[at] = key;
+                const int b = (y / kBlockSize) * kBlocksX + x / kBlockSize;
+                dirtyBlocks |= uint64_t(1) << b;
+                if (storedNearer<M>(z, s.blockNear[b])) s.blockNear[b] = z;
+                if (storedNearer<M>(z, s.tileNear)) s.tileNear = z;
+              }
+            }
           }
+          for (int i = 0; i < 3; ++i) E[i] += e[i].stepX();
         }
+        for (int i = 0; i < 3; ++i) rowE[i] += e[i].stepY();
       }
-      if (s.state != TileState::Pixels) {
-        Materialize<S, M, kIds>(job, tf);
-        dirtyBlocks = 0;
-      }
+      continue;
+    }
 
-      // The triangle's pixel box within the tile, tile-local and inclusive.
-      const int rx0 = std::max(t.minX - x0, 0), rx1 = std::min(t.maxX - x0, w - 1);
-      const int ry0 = std::max(t.minY - y0, 0), ry1 = std::min(t.maxY - y0, h - 1);
-      V laneE[3], biasV[3];
-      for (int i = 0; i < 3; ++i) {
-        laneE[i] = hn::Mul(lane, hn::Set(d, double(e[i].stepX())));  // lane j: j * stepX, exact
-        biasV[i] = hn::Set(d, double(e[i].bias));
-      }
+    const V qNearV = hn::Set(d, qNear);
+    const auto idV = hn::Set(du, key);
+    // A triangle parallel to the image plane has both planes constant (a = b = 0): a*X and
+    // b*Y are zeros of a fixed sign, so every pixel computes the same bits as its first one.
+    const bool constantDepth = t.depthNum.a == 0 && t.depthNum.b == 0 && t.depthDen.a == 0 && t.depthDen.b == 0;
+    const double Y0 = y0 + ry0 + 0.5;
+    const V zConstant =
+        constantDepth ? hn::Set(d, fragmentStored<S>(m, x0 + rx0 + 0.5, m.p.b * Y0, m.q.b * Y0)) : hn::Zero(d);
 
-      // Small triangles (a box of at most kSmallPixels centres, most of a million-triangle
-      // mesh): pixel by pixel in scalar code, with the same operations as the lanes below.
-      if ((rx1 - rx0 + 1) * (ry1 - ry0 + 1) <= kSmallPixels) {
-        // Behind everything stored in the (1 to 4) blocks its box touches: nothing to do (the
-        // blocks' farthest values may be stale, still bounds).
-        bool beaten = true;
-        for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
-          for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx)
-            beaten &= Beaten<M, kIds>(qNear, s.blockFar[by * kBlocksX + bx]);
-        if (beaten) {
+    for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
+      for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx) {
+        const int b = by * kBlocksX + bx;
+        if (Beaten<M, kIds>(qNear, s.blockFar[b])) {
           if constexpr (kCountBlocks) ++count.blocksCulled;
           continue;
         }
-        for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
-          for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx)
-            if (s.blockKey[by * kBlocksX + bx]) MaterializeBlock<S, M, kIds>(job, tf, by * kBlocksX + bx);
-        int64_t rowE[3];
-        for (int i = 0; i < 3; ++i) rowE[i] = e[i].at(centerFixed(x0 + rx0), centerFixed(y0 + ry0));
-        for (int y = ry0; y <= ry1; ++y) {
-          const double Y = double(y0 + y) + 0.5, pRow = m.p.b * Y, qRow = m.q.b * Y;
-          int64_t E[3] = {rowE[0], rowE[1], rowE[2]};
-          for (int x = rx0; x <= rx1; ++x) {
-            if (E[0] >= e[0].bias && E[1] >= e[1].bias && E[2] >= e[2].bias) {
-              const size_t at = size_t(y) * kTileSize + size_t(x);
-              const double stored = s.depth[at];
-              if (!Beaten<M, kIds>(qNear, stored)) {
-                const double z = fragmentStored<S>(m, double(x) + (double(x0) + 0.5), pRow, qRow);
-                ++tests;
-                if (storedNearer<M>(z, stored) || (kIds && z == stored && key < s.triangle[at])) {
-                  ++writes;
-                  s.depth[at] = z;
-                  if constexpr (kIds) s.triangle[at] = key;
-                  const int b = (y / kBlockSize) * kBlocksX + x / kBlockSize;
-                  dirtyBlocks |= uint64_t(1) << b;
-                  if (storedNearer<M>(z, s.blockNear[b])) s.blockNear[b] = z;
-                  if (storedNearer<M>(z, s.tileNear)) s.tileNear = z;
-                }
+        // The block's part of the box. Its four corner centres bound every edge function on
+        // it: all outside one edge -> empty, all inside all edges -> full.
+        const int cx0 = std::max(bx * kBlockSize, rx0), cx1 = std::min(bx * kBlockSize + kBlockSize - 1, rx1);
+        const int cy0 = std::max(by * kBlockSize, ry0), cy1 = std::min(by * kBlockSize + kBlockSize - 1, ry1);
+        bool full = true, empty = false;
+        for (const Edge& edge : e) {
+          int inside = 0;
+          for (int c = 0; c < 4; ++c)
+            inside += edge.at(centerFixed(x0 + (c & 1 ? cx1 : cx0)), centerFixed(y0 + (c & 2 ? cy1 : cy0))) >= edge.bias;
+          empty |= inside == 0;
+          full &= inside == 4;
+        }
+        if (empty) {
+          if constexpr (kCountBlocks) ++count.blocksEmpty;
+          continue;
+        }
+        if constexpr (kCountBlocks) ++(full ? count.blocksFull : count.blocksPartial);
+        // Whole block: a triangle parallel to the image plane (every fragment stores
+        // zConstant's bits) covering every pixel centre of the block (in the image), in front
+        // of everything stored there: the block becomes the triangle's plane, in O(1). (Sloped
+        // triangles would need storedRange per block: on the city that cost more than it saved.)
+        const int blockX1 = std::min(bx * kBlockSize + kBlockSize - 1, w - 1);
+        const int blockY1 = std::min(by * kBlockSize + kBlockSize - 1, h - 1);
+        if (constantDepth && full && cx0 == bx * kBlockSize && cy0 == by * kBlockSize && cx1 == blockX1 &&
+            cy1 == blockY1) {
+          const StoredRange r{hn::GetLane(zConstant), hn::GetLane(zConstant)};
+          if (storedNearer<M>(r.farthest, s.blockNear[b])) {
+            const uint64_t cells = uint64_t(cx1 - cx0 + 1) * uint64_t(cy1 - cy0 + 1);
+            tests += cells;
+            writes += cells;
+            ++count.blocksWhole;
+            s.blockKey[b] = key;
+            s.blockTriangle[b] = &t;
+            s.tileFarStale |= s.blockFar[b] == s.tileFar;
+            s.blockFar[b] = r.farthest;
+            s.blockNear[b] = r.nearest;
+            if (storedNearer<M>(r.nearest, s.tileNear)) s.tileNear = r.nearest;
+            dirtyBlocks &= ~(uint64_t(1) << b);  // its pixel buffers are no longer its values
+            continue;
+          }
+        }
+        if (s.blockKey[b]) MaterializeBlock<S, M, kIds>(job, tf, b);
+
+        const int bxPixel = bx * kBlockSize;  // tile-local x of the block's first column
+        const V colLo = hn::Set(d, double(cx0)), colHi = hn::Set(d, double(cx1));
+        int64_t rowE[3];  // edge functions at the block's first column, current row
+        for (int i = 0; i < 3; ++i) rowE[i] = e[i].at(centerFixed(x0 + bxPixel), centerFixed(y0 + cy0));
+        // The block's farthest value after this triangle, gathered from the rows it visits.
+        V far = nearestV, nearestWritten = farthestV;
+        V wroteMask = hn::Zero(d);
+        for (int y = cy0; y <= cy1; ++y) {
+          const double Y = double(y0 + y) + 0.5;
+          for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+            const size_t at = size_t(y) * kTileSize + size_t(bxPixel) + k;
+            const V stored = hn::Load(d, s.depth + at);
+            V result = stored;
+            const V col = hn::Add(lane, hn::Set(d, double(bxPixel + int(k))));
+            Mask cover = hn::And(hn::Ge(col, colLo), hn::Le(col, colHi));
+            if (!full)
+              for (int i = 0; i < 3; ++i) {
+                const V edgeV = hn::Add(hn::Set(d, double(rowE[i] + int64_t(k) * e[i].stepX())), laneE[i]);
+                cover = hn::And(cover, hn::Ge(edgeV, biasV[i]));
               }
+            // Only pixels where something farther than the triangle's nearest value is stored
+            // can change (counted as tested). The row is computed without branches either
+            // way: a mispredicted branch costs more than the division it would save.
+            const Mask maybe = hn::And(cover, kIds ? NotFarther<kGreater>(qNearV, stored) : Nearer<kGreater>(qNearV, stored));
+            // Pixel centres X = x + 0.5; depth = P(X, Y) / Q(X, Y) (raster/fragment_depth.hpp).
+            const V z = constantDepth ? zConstant : StoredDepth<S>(m, hn::Add(col, hn::Set(d, double(x0) + 0.5)), Y);
+            Mask win = hn::And(maybe, Nearer<kGreater>(z, stored));
+            if constexpr (kIds) {  // a tie goes to the triangle submitted first
+              const auto old = hn::Load(du, s.triangle + at);
+              const Mask tie = hn::And(hn::Eq(z, stored), hn::RebindMask(d, hn::Lt(hn::BitCast(di, idV), hn::BitCast(di, old))));
+              win = hn::Or(win, hn::And(maybe, tie));
+              hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
             }
-            for (int i = 0; i < 3; ++i) E[i] += e[i].stepX();
+            tests += hn::CountTrue(d, maybe);
+            writes += hn::CountTrue(d, win);
+            result = hn::IfThenElse(win, z, stored);
+            hn::Store(result, d, s.depth + at);
+            nearestWritten = NearerOf<kGreater>(nearestWritten, hn::IfThenElse(win, z, farthestV));
+            wroteMask = hn::Or(wroteMask, hn::VecFromMask(d, win));
+            if constexpr (kCountBlocks) count.rowsCulled += hn::AllFalse(d, maybe) && !hn::AllFalse(d, cover);
+            far = Farther<kGreater>(far, result);
           }
           for (int i = 0; i < 3; ++i) rowE[i] += e[i].stepY();
         }
-        continue;
-      }
-
-      const V qNearV = hn::Set(d, qNear);
-      const auto idV = hn::Set(du, key);
-      // A triangle parallel to the image plane has both planes constant (a = b = 0): a*X and
-      // b*Y are zeros of a fixed sign, so every pixel computes the same bits as its first one.
-      const bool constantDepth = t.depthNum.a == 0 && t.depthNum.b == 0 && t.depthDen.a == 0 && t.depthDen.b == 0;
-      const double Y0 = y0 + ry0 + 0.5;
-      const V zConstant =
-          constantDepth ? hn::Set(d, fragmentStored<S>(m, x0 + rx0 + 0.5, m.p.b * Y0, m.q.b * Y0)) : hn::Zero(d);
-
-      for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
-        for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx) {
-          const int b = by * kBlocksX + bx;
-          if (Beaten<M, kIds>(qNear, s.blockFar[b])) {
-            if constexpr (kCountBlocks) ++count.blocksCulled;
-            continue;
+        if (!hn::AllFalse(d, hn::MaskFromVec(wroteMask))) {
+          // The block's rows outside the triangle's box kept their values.
+          for (int y = by * kBlockSize; y < (by + 1) * kBlockSize; ++y) {
+            if (y == cy0) y = cy1 + 1;
+            if (y >= (by + 1) * kBlockSize) break;
+            for (size_t k = 0; k < size_t(kBlockSize); k += N)
+              far = Farther<kGreater>(far, hn::Load(d, s.depth + size_t(y) * kTileSize + size_t(bxPixel) + k));
           }
-          // The block's part of the box. Its four corner centres bound every edge function on
-          // it: all outside one edge -> empty, all inside all edges -> full.
-          const int cx0 = std::max(bx * kBlockSize, rx0), cx1 = std::min(bx * kBlockSize + kBlockSize - 1, rx1);
-          const int cy0 = std::max(by * kBlockSize, ry0), cy1 = std::min(by * kBlockSize + kBlockSize - 1, ry1);
-          bool full = true, empty = false;
-          for (const Edge& edge : e) {
-            int inside = 0;
-            for (int c = 0; c < 4; ++c)
-              inside += edge.at(centerFixed(x0 + (c & 1 ? cx1 : cx0)), centerFixed(y0 + (c & 2 ? cy1 : cy0))) >= edge.bias;
-            empty |= inside == 0;
-            full &= inside == 4;
-          }
-          if (empty) {
-            if constexpr (kCountBlocks) ++count.blocksEmpty;
-            continue;
-          }
-          if constexpr (kCountBlocks) ++(full ? count.blocksFull : count.blocksPartial);
-          // Whole block: a triangle parallel to the image plane (every fragment stores
-          // zConstant's bits) covering every pixel centre of the block (in the image), in front
-          // of everything stored there: the block becomes the triangle's plane, in O(1). (Sloped
-          // triangles would need storedRange per block: on the city that cost more than it saved.)
-          const int blockX1 = std::min(bx * kBlockSize + kBlockSize - 1, w - 1);
-          const int blockY1 = std::min(by * kBlockSize + kBlockSize - 1, h - 1);
-          if (constantDepth && full && cx0 == bx * kBlockSize && cy0 == by * kBlockSize && cx1 == blockX1 &&
-              cy1 == blockY1) {
-            const StoredRange r{hn::GetLane(zConstant), hn::GetLane(zConstant)};
-            if (storedNearer<M>(r.farthest, s.blockNear[b])) {
-              const uint64_t cells = uint64_t(cx1 - cx0 + 1) * uint64_t(cy1 - cy0 + 1);
-              tests += cells;
-              writes += cells;
-              ++count.blocksWhole;
-              s.blockKey[b] = key;
-              s.blockTriangle[b] = &t;
-              s.tileFarStale |= s.blockFar[b] == s.tileFar;
-              s.blockFar[b] = r.farthest;
-              s.blockNear[b] = r.nearest;
-              if (storedNearer<M>(r.nearest, s.tileNear)) s.tileNear = r.nearest;
-              dirtyBlocks &= ~(uint64_t(1) << b);  // its pixel buffers are no longer its values
-              continue;
-            }
-          }
-          if (s.blockKey[b]) MaterializeBlock<S, M, kIds>(job, tf, b);
-
-          const int bxPixel = bx * kBlockSize;  // tile-local x of the block's first column
-          const V colLo = hn::Set(d, double(cx0)), colHi = hn::Set(d, double(cx1));
-          int64_t rowE[3];  // edge functions at the block's first column, current row
-          for (int i = 0; i < 3; ++i) rowE[i] = e[i].at(centerFixed(x0 + bxPixel), centerFixed(y0 + cy0));
-          // The block's farthest value after this triangle, gathered from the rows it visits.
-          V far = nearestV, nearestWritten = farthestV;
-          V wroteMask = hn::Zero(d);
-          for (int y = cy0; y <= cy1; ++y) {
-            const double Y = double(y0 + y) + 0.5;
-            for (size_t k = 0; k < size_t(kBlockSize); k += N) {
-              const size_t at = size_t(y) * kTileSize + size_t(bxPixel) + k;
-              const V stored = hn::Load(d, s.depth + at);
-              V result = stored;
-              const V col = hn::Add(lane, hn::Set(d, double(bxPixel + int(k))));
-              Mask cover = hn::And(hn::Ge(col, colLo), hn::Le(col, colHi));
-              if (!full)
-                for (int i = 0; i < 3; ++i) {
-                  const V edgeV = hn::Add(hn::Set(d, double(rowE[i] + int64_t(k) * e[i].stepX())), laneE[i]);
-                  cover = hn::And(cover, hn::Ge(edgeV, biasV[i]));
-                }
-              // Only pixels where something farther than the triangle's nearest value is stored
-              // can change (counted as tested). The row is computed without branches either
-              // way: a mispredicted branch costs more than the division it would save.
-              const Mask maybe = hn::And(cover, kIds ? NotFarther<kGreater>(qNearV, stored) : Nearer<kGreater>(qNearV, stored));
-              // Pixel centres X = x + 0.5; depth = P(X, Y) / Q(X, Y) (raster/fragment_depth.hpp).
-              const V z = constantDepth ? zConstant : StoredDepth<S>(m, hn::Add(col, hn::Set(d, double(x0) + 0.5)), Y);
-              Mask win = hn::And(maybe, Nearer<kGreater>(z, stored));
-              if constexpr (kIds) {  // a tie goes to the triangle submitted first
-                const auto old = hn::Load(du, s.triangle + at);
-                const Mask tie = hn::And(hn::Eq(z, stored), hn::RebindMask(d, hn::Lt(hn::BitCast(di, idV), hn::BitCast(di, old))));
-                win = hn::Or(win, hn::And(maybe, tie));
-                hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
-              }
-              tests += hn::CountTrue(d, maybe);
-              writes += hn::CountTrue(d, win);
-              result = hn::IfThenElse(win, z, stored);
-              hn::Store(result, d, s.depth + at);
-              nearestWritten = NearerOf<kGreater>(nearestWritten, hn::IfThenElse(win, z, farthestV));
-              wroteMask = hn::Or(wroteMask, hn::VecFromMask(d, win));
-              if constexpr (kCountBlocks) count.rowsCulled += hn::AllFalse(d, maybe) && !hn::AllFalse(d, cover);
-              far = Farther<kGreater>(far, result);
-            }
-            for (int i = 0; i < 3; ++i) rowE[i] += e[i].stepY();
-          }
-          if (!hn::AllFalse(d, hn::MaskFromVec(wroteMask))) {
-            // The block's rows outside the triangle's box kept their values.
-            for (int y = by * kBlockSize; y < (by + 1) * kBlockSize; ++y) {
-              if (y == cy0) y = cy1 + 1;
-              if (y >= (by + 1) * kBlockSize) break;
-              for (size_t k = 0; k < size_t(kBlockSize); k += N)
-                far = Farther<kGreater>(far, hn::Load(d, s.depth + size_t(y) * kTileSize + size_t(bxPixel) + k));
-            }
-            // The tile's farthest value can only move when the block that held it moved.
-            s.tileFarStale |= s.blockFar[b] == s.tileFar;
-            s.blockFar[b] = FarthestLane<kGreater>(far);
-            const double written = NearestLane<kGreater>(nearestWritten);
-            if (storedNearer<M>(written, s.blockNear[b])) s.blockNear[b] = written;
-            if (storedNearer<M>(written, s.tileNear)) s.tileNear = written;
-          }
+          // The tile's farthest value can only move when the block that held it moved.
+          s.tileFarStale |= s.blockFar[b] == s.tileFar;
+          s.blockFar[b] = FarthestLane<kGreater>(far);
+          const double written = NearestLane<kGreater>(nearestWritten);
+          if (storedNearer<M>(written, s.blockNear[b])) s.blockNear[b] = written;
+          if (storedNearer<M>(written, s.tileNear)) s.tileNear = written;
         }
-    }
+      }
   }
   count.depthTests = tests;
   count.depthWrites = writes;
