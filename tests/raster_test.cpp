@@ -370,14 +370,12 @@ TEST(Raster, VertexPassEqualsScalarOnEveryInstructionSet) {
   for (int64_t target : targets) {
     hwy::SetSupportedTargetsForTest(target);
     for (size_t count : {size_t(1), size_t(7), size_t(8), points.size()}) {
-      std::vector<HVertex> hv(count);
       std::vector<uint8_t> codes(count);
       std::vector<ProjectedVertex> projected(count);
-      transformVertices(points.data(), count, M, cam, hv.data(), codes.data(), projected.data());
+      transformVertices(points.data(), count, M, cam, codes.data(), projected.data());
       const std::string what = std::string(hwy::TargetName(target)) + " count " + std::to_string(count);
       for (size_t i = 0; i < count; ++i) {
         const HVertex h = transformVertex(points[i], M);
-        ASSERT_EQ(std::memcmp(&h, &hv[i], sizeof h), 0) << what << " " << i;
         ASSERT_EQ(uint32_t(codes[i]), clipOutcode(h, cam)) << what << " " << i;
         if (codes[i]) continue;
         const ProjectedVertex p = projectVertex(h);

@@ -186,7 +186,7 @@ std::vector<SetupTriangle> FrontEndOutput::flatten() const {
 }
 
 uint64_t FrontEndOutput::memoryBytes() const {
-  uint64_t bytes = hv.capacity() * sizeof(HVertex) + outcodes.capacity() +
+  uint64_t bytes = outcodes.capacity() +
                    projected.capacity() * sizeof(ProjectedVertex) + faceVisible.capacity();
   for (const auto& c : chunks)
     bytes += c.triangles.capacity() * sizeof(SetupTriangle) + c.nearest.capacity() * sizeof(double);
@@ -246,9 +246,7 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
     }
     if (batched) flush();
     ++counters.clipped;
-    poly[0] = fe.hv[tri.v[0]];
-    poly[1] = fe.hv[tri.v[1]];
-    poly[2] = fe.hv[tri.v[2]];
+    for (int k = 0; k < 3; ++k) poly[k] = transformVertex(scene.positions[tri.v[k]], fe.pixelFromWorld);
     const int n = clipPolygon(poly, 3, c0 | c1 | c2, cam, scratch);
     // The clipped polygon is convex: fan it. Every piece keeps the triangle's and face's index.
     for (int i = 1; i + 1 < n; ++i) {
@@ -286,15 +284,15 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
   // Every vertex once, in double, straight from world to homogeneous pixel coordinates; those
   // inside the clip volume are projected and snapped here, shared by all their triangles.
   const size_t nv = scene.positions.size();
-  out.hv.resize(nv);
   out.outcodes.resize(nv);
   out.projected.resize(nv);
-  const dmat4 pixelFromWorld = cam.pixelFromCamera * cam.cameraFromWorld;
+  out.pixelFromWorld = cam.pixelFromCamera * cam.cameraFromWorld;
+  const dmat4& pixelFromWorld = out.pixelFromWorld;
   const size_t vertexChunks = (nv + kChunkTriangles - 1) / kChunkTriangles;
   parallelFor(0, vertexChunks, threads, [&](size_t c) {
     const size_t first = c * kChunkTriangles, count = std::min(nv, first + kChunkTriangles) - first;
-    transformVertices(scene.positions.data() + first, count, pixelFromWorld, cam, out.hv.data() + first,
-                      out.outcodes.data() + first, out.projected.data() + first);
+    transformVertices(scene.positions.data() + first, count, pixelFromWorld, cam, out.outcodes.data() + first,
+                      out.projected.data() + first);
   });
 
   // Triangles in fixed chunks, each into its own list (read in chunk order, they are the

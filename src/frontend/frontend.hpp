@@ -121,7 +121,7 @@ struct FrontEndOutput : FrontEndCounters {
   uint64_t memoryBytes() const;
 
   // Scratch reused from frame to frame (no allocation once warm).
-  std::vector<HVertex> hv;
+  dmat4 pixelFromWorld{1.0};  // the frame's world -> homogeneous pixel transform
   std::vector<uint8_t> outcodes;
   std::vector<ProjectedVertex> projected;
   std::vector<uint8_t> faceVisible;
@@ -141,11 +141,13 @@ HVertex transformVertex(const dvec3& p, const dmat4& M);
 /// The clipping planes (near, far, guard band) vertex v lies outside of, one bit each.
 uint32_t clipOutcode(const HVertex& v, const Camera& cam);
 
-/// The vertex pass of vertices [0, count), with SIMD (frontend/setup_batch.cpp): hv[i] =
-/// transformVertex(positions[i], M), outcodes[i] = clipOutcode(hv[i]) and, when that is 0,
-/// projected[i] = projectVertex(hv[i]) — bit for bit those functions' results.
-void transformVertices(const dvec3* positions, size_t count, const dmat4& M, const Camera& cam, HVertex* hv,
-                       uint8_t* outcodes, ProjectedVertex* projected);
+/// The vertex pass of vertices [0, count), with SIMD (frontend/setup_batch.cpp): with h =
+/// transformVertex(positions[i], M), outcodes[i] = clipOutcode(h) and, when that is 0,
+/// projected[i] = projectVertex(h) — bit for bit those functions' results. (The homogeneous
+/// vertices themselves are not kept: the few triangles that need clipping transform theirs
+/// again, to the same bits.)
+void transformVertices(const dvec3* positions, size_t count, const dmat4& M, const Camera& cam, uint8_t* outcodes,
+                       ProjectedVertex* projected);
 
 /// Sets up one triangle whose vertices are inside the clip volume: culls and fills `t`.
 /// Returns false, counting the reason in `counters`, when it draws nothing.

@@ -285,7 +285,7 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
 
 // transformVertices() (frontend.hpp): transformVertex, clipOutcode and projectVertex
 // (frontend.cpp) lane by lane, with the same IEEE operations in the same order.
-void TransformVertices(const dvec3* positions, size_t count, const dmat4& matrix, const Camera& cam, HVertex* hv,
+void TransformVertices(const dvec3* positions, size_t count, const dmat4& matrix, const Camera& cam,
                        uint8_t* outcodes, ProjectedVertex* projected) {
   static_assert(sizeof(dvec3) == 3 * sizeof(double) && sizeof(HVertex) == 4 * sizeof(double));
   const D d;
@@ -324,13 +324,6 @@ void TransformVertices(const dvec3* positions, size_t count, const dmat4& matrix
     const V sx = hn::Div(hx, w), sy = hn::Div(hy, w);
     const V X = hn::Floor(hn::Add(hn::Mul(sx, subpixel), half)), Y = hn::Floor(hn::Add(hn::Mul(sy, subpixel), half));
     const V num = hn::Div(depth, w), den = hn::Div(one, w);
-    if (lanes == N) {
-      hn::StoreInterleaved4(hx, hy, depth, w, d, reinterpret_cast<double*>(hv + first));
-    } else {
-      HWY_ALIGN double l[4][kSetupBatch];
-      hn::Store(hx, d, l[0]), hn::Store(hy, d, l[1]), hn::Store(depth, d, l[2]), hn::Store(w, d, l[3]);
-      for (size_t j = 0; j < lanes; ++j) hv[first + j] = {l[0][j], l[1][j], l[2][j], l[3][j]};
-    }
     uint8_t bits[6][8] = {};
     for (int p = 0; p < 6; ++p) hn::StoreMaskBits(d, outside[p], bits[p]);
     HWY_ALIGN double l[6][kSetupBatch];
@@ -357,9 +350,9 @@ namespace hsr {
 HWY_EXPORT(SetupBatch);
 HWY_EXPORT(TransformVertices);
 
-void transformVertices(const dvec3* positions, size_t count, const dmat4& M, const Camera& cam, HVertex* hv,
-                       uint8_t* outcodes, ProjectedVertex* projected) {
-  HWY_DYNAMIC_DISPATCH(TransformVertices)(positions, count, M, cam, hv, outcodes, projected);
+void transformVertices(const dvec3* positions, size_t count, const dmat4& M, const Camera& cam, uint8_t* outcodes,
+                       ProjectedVertex* projected) {
+  HWY_DYNAMIC_DISPATCH(TransformVertices)(positions, count, M, cam, outcodes, projected);
 }
 
 size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
