@@ -423,7 +423,7 @@ int run(Options& o) {
     fmt::print("  hsr zbuffer ({} raster): median {:.2f} ms, min {:.2f} ms\n", o.raster, hsrTime.median, hsrTime.min);
     fmt::print("  llvmpipe:    median {:.2f} ms, min {:.2f} ms\n", glTime.median, glTime.min);
     fmt::print("  ratio llvmpipe / hsr (medians): {:.3f}\n", ratio);
-  fmt::print("  writing hsr's frame once (clear, no rendering): median {:.2f} ms\n", writeTime.median);
+    fmt::print("  writing hsr's frame once (clear, no rendering): median {:.2f} ms\n", writeTime.median);
     fmt::print("  face ids: {} of {} covered pixels equal ({:.4f}%), {} mismatches on edges, {} elsewhere\n", ids.equal,
                ids.covered, 100.0 * ids.equalFraction(), ids.edgeMismatches, ids.nonEdgeMismatches);
     for (auto [x, y] : ids.firstNonEdge) {

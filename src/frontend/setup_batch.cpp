@@ -287,7 +287,7 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
 // (frontend.cpp) lane by lane, with the same IEEE operations in the same order.
 void TransformVertices(const dvec3* positions, size_t count, const dmat4& matrix, const Camera& cam,
                        uint8_t* outcodes, ProjectedVertex* projected) {
-  static_assert(sizeof(dvec3) == 3 * sizeof(double) && sizeof(HVertex) == 4 * sizeof(double));
+  static_assert(sizeof(dvec3) == 3 * sizeof(double));
   const D d;
   const size_t N = hn::Lanes(d);
   const hn::Rebind<int64_t, D> di;
