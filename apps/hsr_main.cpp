@@ -375,18 +375,28 @@ Runner setupRender(CLI::App& cmd) {
 struct BenchFlags {
   ViewFlags view;
   int frames = 10, warmup = 2;
-  bool json = false;
+  bool json = false, occlusion = false;
 };
 
 int runBench(const BenchFlags& f) {
   Job job = f.view.prepare();
   std::vector<double> frameMs;
   hsr::Frame frame;
+  hsr::OcclusionBuffer occlusion;
+  if (f.occlusion && (job.options.algorithm != "zbuffer" || job.options.raster != hsr::RasterKind::Tiled))
+    throw hsr::InputError("--occlusion: times the occlusion buffer (the tiled z-buffer, depth only); drop "
+                          "--algorithm and --raster");
   for (int i = 0; i < f.warmup + f.frames; ++i) {
     auto start = std::chrono::steady_clock::now();
-    hsr::render(job.scene, job.camera, job.options, frame);  // reuses the frame's buffers
+    if (f.occlusion)  // depth kept in tiles, no image: what an occlusion culler pays per frame
+      occlusion.render(job.scene, job.camera, {job.options.depthFormat, job.options.cull, job.options.threads});
+    else
+      hsr::render(job.scene, job.camera, job.options, frame);  // reuses the frame's buffers
     double ms = millisecondsSince(start);
     if (i >= f.warmup) frameMs.push_back(ms);
+  }
+  if (f.occlusion) {
+    occlusion.depthImage(frame);  // its statistics, with covered_pixels (not timed)
   }
   std::vector<double> sorted = frameMs;
   std::sort(sorted.begin(), sorted.end());
@@ -434,11 +444,15 @@ Runner setupBench(CLI::App& cmd) {
   f->view.declare(cmd);
   cmd.add_option("--frames", f->frames, "Timed frames")->type_name("N")->check(CLI::Range(1, 1000000))->capture_default_str();
   cmd.add_option("--warmup", f->warmup, "Untimed frames first")->type_name("K")->check(CLI::Range(0, 1000000))->capture_default_str();
+  cmd.add_flag("--occlusion", f->occlusion,
+               "Time the occlusion buffer (hsr::OcclusionBuffer::render): the tiled z-buffer's depth only, kept in "
+               "tiles, no image written (what an occlusion culler pays per frame)");
   cmd.add_flag("--json", f->json,
                "Print one JSON object: median_ms, min_ms, frames, frame_ms, threads, scene, size, build and the "
                "last frame's statistics");
   cmd.footer(
-      "Times are wall-clock milliseconds of whole render() calls.\n\n"
+      "Times are wall-clock milliseconds of whole render() calls (with --occlusion, of OcclusionBuffer::render "
+      "calls).\n\n"
       "Examples:\n"
       "  hsr bench builtin:cubes --frames 20\n"
       "  hsr bench model.obj --camera cam.json --size 1920x1080 --algorithm zbuffer --threads 1 --json");

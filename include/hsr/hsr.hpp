@@ -8,3 +8,4 @@
 #include <hsr/io.hpp>
 #include <hsr/render.hpp>
 #include <hsr/scene.hpp>
+#include <hsr/occlusion.hpp>

@@ -10,4 +10,8 @@ namespace hsr::algo {
 void zbuffer(const Scene&, const Camera&, const RenderOptions&, Frame&);  // zbuffer.cpp
 void raycast(const Scene&, const Camera&, const RenderOptions&, Frame&);  // raycast.cpp
 
+/// Throws InputError unless the camera's image size is in 1..kMaxImageSize and the depth format
+/// suits the camera (render.cpp; also checked by the occlusion buffer).
+void checkImage(const Camera& camera, DepthFormat format);
+
 }  // namespace hsr::algo

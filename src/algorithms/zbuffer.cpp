@@ -26,6 +26,7 @@
 #include "raster/halfspace.hpp"
 #include "raster/scanline.hpp"
 #include "raster/tiled.hpp"
+#include "algorithms/tiled_pass.hpp"
 
 namespace hsr::algo {
 namespace {
@@ -93,24 +94,8 @@ void drawReference(const std::vector<SetupTriangle>& tris, const Camera& cam, co
 }
 
 // ---------------------------------------------------------------------------------------------
-// The tiled path. Everything it needs from frame to frame stays with the calling thread, so
-// that a warm frame allocates nothing here: the front end's output, the bins, one tile scratch
-// per worker and the per-tile counters.
-struct TiledState {
-  FrontEndOutput fe;
-  tiled::Bins bins;
-  std::vector<tiled::TileScratch> scratch;
-  std::vector<tiled::TileOrder> orders;  // per worker
-  std::vector<tiled::RasterCounters> counters;  // per tile
-  std::vector<uint64_t> covered;                // per tile
-};
+// The tiled path (its state, front end and binning shared with the occlusion buffer: tiled_pass.hpp).
 
-// Threads pay off only with enough work: handing work to a pool thread costs about as much as
-// the kernel spends on ~4000 small binned triangles; clearing and resolving a tile counts as 40
-// of them. (Measured on builtin scenes; a thread more on a small frame is slower, a thread less
-// on a big one wastes a core.)
-constexpr size_t kWorkPerThread = 4000;
-constexpr size_t kWorkPerTile = 40;
 // A worker's unit: up to 8 tiles side by side (512 pixels), resolved 8 rows at a time across
 // them. Measured writing 1920x1080x4 buffers in this order: 5.4 ms, vs 27 ms tile by tile.
 constexpr int kSegmentTiles = 8;
@@ -123,22 +108,11 @@ constexpr int kResolveBand = 8;
 // summed in tile order.
 void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const TriangleShader& shade, Frame& frame,
                TiledState& state, Counters& n, tiled::RasterCounters& total) {
-  const int threads = resolveThreads(opt.threads);
   const tiled::Bins& bins = state.bins;
   const int segmentsX = (bins.tilesX + kSegmentTiles - 1) / kSegmentTiles;
   const size_t segments = size_t(segmentsX) * size_t(bins.tilesY);
-  size_t work = 0, mostEntries = 0;
-  for (int tile = 0; tile < bins.tileCount(); ++tile) {
-    const size_t entries = bins.entries(tile);
-    work += entries + kWorkPerTile;
-    mostEntries = std::max(mostEntries, entries);
-  }
-  const int workers = int(std::clamp<size_t>(work / kWorkPerThread, 1, size_t(threads)));
+  const int workers = prepareTilePass(state, resolveThreads(opt.threads));
   if (state.scratch.size() < size_t(workers) * kSegmentTiles) state.scratch.resize(size_t(workers) * kSegmentTiles);
-  if (state.orders.size() < size_t(workers)) state.orders.resize(size_t(workers));
-  for (tiled::TileOrder& order : state.orders) order.reserve(mostEntries);  // any worker may meet the fullest tile
-  state.counters.assign(size_t(bins.tileCount()), {});
-  state.covered.assign(size_t(bins.tileCount()), 0);
   const bool ids = opt.outputs != FrameOutputs::DepthOnly;
   std::atomic<size_t> next{0};
   parallelFor(0, size_t(workers), workers, [&](size_t worker) {
@@ -159,8 +133,6 @@ void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const Triangle
     total.add(state.counters[size_t(tile)]);
     n.covered += state.covered[size_t(tile)];
   }
-  n.tests = total.depthTests;
-  n.writes = total.depthWrites;
 }
 
 }  // namespace
@@ -181,18 +153,12 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
   FrontEndOutput& fe = isTiled ? state.fe : referenceFe;
 
   if (isTiled) {
-    // Each chunk is binned by the worker that set it up, while it is in that core's cache.
     const DepthSetup depth{opt.depthFormat, cam.near, cam.far, cam.orthographic};
-    tiled::prepareBins(state.bins, cam.width, cam.height, (scene.triangles.size() + kChunkTriangles - 1) / kChunkTriangles);
-    runFrontEnd(
-        scene, cam, opt, fe, [&](size_t chunk) { tiled::binChunk(state.bins, chunk, fe.chunks[chunk]); }, &depth);
+    setUpAndBin(scene, cam, opt, depth, state);
     st.addTime("frontend", timer.lap());
     drawTiled(opt, depth, shade, frame, state, n, tiledCounters);
     st.addTime("raster", timer.lap());
-    bufferBytes = state.bins.memoryBytes() + state.scratch.size() * sizeof(tiled::TileScratch) +
-                  state.counters.capacity() * sizeof(tiled::RasterCounters) +
-                  state.covered.capacity() * sizeof(uint64_t);
-    for (const tiled::TileOrder& order : state.orders) bufferBytes += order.memoryBytes();
+    bufferBytes = state.memoryBytes();
   } else {
     runFrontEnd(scene, cam, opt, fe);
     const std::vector<SetupTriangle> tris = fe.flatten();
@@ -206,19 +172,15 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
 
   st.algorithm = "zbuffer";
   st.depth_format = opt.depthFormat.name();
-  st.triangles_clipped = fe.clipped;
-  st.triangles_degenerate = fe.degenerate;
-  st.culled_backface = fe.culledBackface;
-  st.culled_frustum = fe.culledFrustum;
-  // Tiled: triangle-tile pairs skipped because the triangle lies behind all the tile holds.
-  st.culled_occlusion = tiledCounters.culledTiles;
-  // Tiled: only fragments not rejected early by a tile, block or row bound are compared.
-  st.depth_tests = n.tests;
-  st.depth_writes = n.writes;
+  if (!isTiled) {  // the reference's counts, in the tile pass's fields
+    tiledCounters.depthTests = n.tests;
+    tiledCounters.depthWrites = n.writes;
+  }
+  tiledStats(st, fe, tiledCounters);
   // Fragments that won the depth test: each writes the colour in the reference; the tiled path
   // writes the winner's id instead and its colour once per pixel at resolve (deferred), counted
   // like the reference, one per winning fragment.
-  st.color_writes = opt.outputs == FrameOutputs::All ? n.writes : 0;
+  st.color_writes = opt.outputs == FrameOutputs::All ? st.depth_writes : 0;
   st.covered_pixels = n.covered;
   const uint64_t pixels = uint64_t(cam.width) * cam.height;
   st.memory_bytes = bufferBytes + pixels * (sizeof(Rgba8) + 2 * sizeof(int32_t) + sizeof(float)) /* frame */ +

@@ -24,6 +24,13 @@ const AlgorithmInfo* findAlgorithm(const std::string& name) {
   return nullptr;
 }
 
+void algo::checkImage(const Camera& camera, DepthFormat format) {
+  if (camera.width <= 0 || camera.height <= 0 || camera.width > kMaxImageSize || camera.height > kMaxImageSize)
+    throw InputError("--size: width and height must be in 1.." + std::to_string(kMaxImageSize));
+  if (format.mapping == DepthMapping::Inv && !(camera.near > 0))
+    throw InputError("--depth-format: the inv mapping needs near > 0");
+}
+
 Frame render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
   Frame frame;
   render(scene, camera, options, frame);
@@ -37,10 +44,7 @@ void render(const Scene& scene, const Camera& camera, const RenderOptions& optio
     for (const AlgorithmInfo& a : algorithms()) names += (names.empty() ? "" : ", ") + a.name;
     throw InputError("--algorithm: unknown algorithm '" + options.algorithm + "' (" + names + ")");
   }
-  if (camera.width <= 0 || camera.height <= 0 || camera.width > kMaxImageSize || camera.height > kMaxImageSize)
-    throw InputError("--size: width and height must be in 1.." + std::to_string(kMaxImageSize));
-  if (options.depthFormat.mapping == DepthMapping::Inv && !(camera.near > 0))
-    throw InputError("--depth-format: the inv mapping needs near > 0");
+  algo::checkImage(camera, options.depthFormat);
 
   if (options.verify && options.outputs == FrameOutputs::DepthOnly)
     throw InputError("--verify: compares face ids, which --depth-only does not keep");

@@ -183,6 +183,78 @@ uint64_t resolveTile(const Bins& bins, int tile, const DepthSetup& depth, FrameO
   return HWY_DYNAMIC_DISPATCH(ResolveTile)(job, scratch, outputs, background, rowBegin, rowEnd, frame);
 }
 
+namespace {
+
+template <DepthStorage S, DepthMapping M>
+double planeStored(const SetupTriangle& t, const DepthSetup& depth, int x, int y) {
+  const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, depth.near, depth.far, depth.orthographic);
+  const double Y = double(y) + 0.5;
+  return fragmentStored<S>(m, double(x) + 0.5, m.p.b * Y, m.q.b * Y);
+}
+
+// The stored value at tile-local (x, y) of a tile at image origin (x0, y0).
+template <DepthStorage S, DepthMapping M>
+double storedIn(const TileScratch& s, const DepthSetup& depth, int x0, int y0, int x, int y) {
+  constexpr int kBlocksX = kTileSize / kBlockSize;
+  if (s.state == TileState::Clear) return double(quantizeDepth<S>(depth.format.clearValue()));
+  if (s.state == TileState::Plane) return planeStored<S, M>(*s.plane, depth, x0 + x, y0 + y);
+  const int b = (y / kBlockSize) * kBlocksX + x / kBlockSize;
+  if (s.blockKey[b]) return planeStored<S, M>(*s.blockTriangle[b], depth, x0 + x, y0 + y);
+  return s.depth[size_t(y) * kTileSize + size_t(x)];
+}
+
+template <DepthStorage S, DepthMapping M>
+bool anyFartherT(const TileScratch& s, const DepthSetup& depth, int tx0, int ty0, int x0, int y0, int x1, int y1,
+                 double q) {
+  constexpr int kBlocksX = kTileSize / kBlockSize;
+  // Bounds: every stored value is nearer than or equal to the farthest bound (the tile's, or
+  // the farthest of its blocks' while it is stale), and farther than or equal to the nearest.
+  if (s.state == TileState::Clear) return storedNearer<M>(q, double(quantizeDepth<S>(depth.format.clearValue())));
+  double far = s.tileFar;
+  if (s.state == TileState::Pixels && s.tileFarStale)
+    for (int b = 0; b < kBlocksPerTile; ++b)
+      if (b == 0 || storedNearer<M>(far, s.blockFar[b])) far = s.blockFar[b];
+  if (!storedNearer<M>(q, far)) return false;
+  if (storedNearer<M>(q, s.tileNear)) return true;
+  auto anyPixel = [&](int px0, int py0, int px1, int py1) {
+    for (int y = py0; y <= py1; ++y)
+      for (int x = px0; x <= px1; ++x)
+        if (storedNearer<M>(q, storedIn<S, M>(s, depth, tx0, ty0, x, y))) return true;
+    return false;
+  };
+  if (s.state == TileState::Plane) return anyPixel(x0, y0, x1, y1);
+  for (int by = y0 / kBlockSize; by <= y1 / kBlockSize; ++by)
+    for (int bx = x0 / kBlockSize; bx <= x1 / kBlockSize; ++bx) {
+      const int b = by * kBlocksX + bx;
+      if (!storedNearer<M>(q, s.blockFar[b])) continue;
+      if (storedNearer<M>(q, s.blockNear[b])) return true;
+      if (anyPixel(std::max(x0, bx * kBlockSize), std::max(y0, by * kBlockSize),
+                   std::min(x1, bx * kBlockSize + kBlockSize - 1), std::min(y1, by * kBlockSize + kBlockSize - 1)))
+        return true;
+    }
+  return false;
+}
+
+}  // namespace
+
+double storedAt(const Bins& bins, int tile, const DepthSetup& depth, const TileScratch& scratch, int x, int y) {
+  double v = 0;
+  visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() {
+    v = storedIn<S, M>(scratch, depth, (tile % bins.tilesX) * kTileSize, (tile / bins.tilesX) * kTileSize, x, y);
+  });
+  return v;
+}
+
+bool anyFarther(const Bins& bins, int tile, const DepthSetup& depth, const TileScratch& scratch, int x0, int y0,
+                int x1, int y1, double stored) {
+  bool any = false;
+  visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() {
+    any = anyFartherT<S, M>(scratch, depth, (tile % bins.tilesX) * kTileSize, (tile / bins.tilesX) * kTileSize, x0,
+                            y0, x1, y1, stored);
+  });
+  return any;
+}
+
 const char* kernelTarget() { return HWY_DYNAMIC_DISPATCH(KernelTarget)(); }
 
 }  // namespace hsr::tiled

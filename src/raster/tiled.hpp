@@ -178,6 +178,17 @@ uint64_t resolveTile(const Bins& bins, int tile, const DepthSetup& depth, FrameO
                      const TriangleShader* shader, Rgba8 background, const TileScratch& scratch, Frame& frame,
                      int rowBegin = 0, int rowEnd = kTileSize);
 
+/// Queries on a tile that rasterizeTile left in `scratch` (the occlusion buffer keeps one per
+/// tile). Its uniform states refer to the frame's set-up triangles, which must still be alive.
+/// Scalar code; the values are the kernel's bits (fragmentStored, as Materialize computes them).
+/// storedAt: the value stored at tile-local pixel (x, y), inside the image.
+double storedAt(const Bins& bins, int tile, const DepthSetup& depth, const TileScratch& scratch, int x, int y);
+/// anyFarther: whether some pixel of the tile-local rectangle [x0, x1] x [y0, y1] (non-empty,
+/// inside the image) stores a value farther than `stored` (a value of the depth format). The
+/// tile's and blocks' bounds answer first; pixels are read only where they cannot.
+bool anyFarther(const Bins& bins, int tile, const DepthSetup& depth, const TileScratch& scratch, int x0, int y0,
+                int x1, int y1, double stored);
+
 /// What the kernel (tile_kernel-inl.h) needs for one tile (scratch and counters: rasterizing only).
 struct TileJob {
   const Bins* bins;

@@ -1,0 +1,61 @@
+// The tiled path's shared steps (tiled_pass.hpp).
+#include "algorithms/tiled_pass.hpp"
+
+#include <algorithm>
+
+namespace hsr::algo {
+namespace {
+
+// Threads pay off only with enough work: handing work to a pool thread costs about as much as
+// the kernel spends on ~4000 small binned triangles; clearing and resolving a tile counts as 40
+// of them. (Measured on builtin scenes; a thread more on a small frame is slower, a thread less
+// on a big one wastes a core.)
+constexpr size_t kWorkPerThread = 4000;
+constexpr size_t kWorkPerTile = 40;
+
+}  // namespace
+
+uint64_t TiledState::memoryBytes() const {
+  uint64_t bytes = bins.memoryBytes() + scratch.size() * sizeof(tiled::TileScratch) +
+                   counters.capacity() * sizeof(tiled::RasterCounters) + covered.capacity() * sizeof(uint64_t);
+  for (const tiled::TileOrder& order : orders) bytes += order.memoryBytes();
+  return bytes;
+}
+
+void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt, const DepthSetup& depth,
+                 TiledState& state) {
+  tiled::prepareBins(state.bins, cam.width, cam.height, (scene.triangles.size() + kChunkTriangles - 1) / kChunkTriangles);
+  runFrontEnd(
+      scene, cam, opt, state.fe, [&](size_t chunk) { tiled::binChunk(state.bins, chunk, state.fe.chunks[chunk]); },
+      &depth);
+}
+
+int prepareTilePass(TiledState& state, int threads) {
+  const tiled::Bins& bins = state.bins;
+  size_t work = 0, mostEntries = 0;
+  for (int tile = 0; tile < bins.tileCount(); ++tile) {
+    const size_t entries = bins.entries(tile);
+    work += entries + kWorkPerTile;
+    mostEntries = std::max(mostEntries, entries);
+  }
+  const int workers = int(std::clamp<size_t>(work / kWorkPerThread, 1, size_t(threads)));
+  if (state.orders.size() < size_t(workers)) state.orders.resize(size_t(workers));
+  for (tiled::TileOrder& order : state.orders) order.reserve(mostEntries);  // any worker may meet the fullest tile
+  state.counters.assign(size_t(bins.tileCount()), {});
+  state.covered.assign(size_t(bins.tileCount()), 0);
+  return workers;
+}
+
+void tiledStats(Stats& st, const FrontEndOutput& fe, const tiled::RasterCounters& counters) {
+  st.triangles_clipped = fe.clipped;
+  st.triangles_degenerate = fe.degenerate;
+  st.culled_backface = fe.culledBackface;
+  st.culled_frustum = fe.culledFrustum;
+  // Triangle-tile pairs skipped because the triangle lies behind all the tile holds.
+  st.culled_occlusion = counters.culledTiles;
+  // Only fragments not rejected early by a tile, block or row bound are compared.
+  st.depth_tests = counters.depthTests;
+  st.depth_writes = counters.depthWrites;
+}
+
+}  // namespace hsr::algo

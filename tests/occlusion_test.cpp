@@ -1,0 +1,209 @@
+// The occlusion buffer (include/hsr/occlusion.hpp): its depth image is the z-buffer's depth-only
+// image bit for bit (against the scalar reference, every depth format, 1 and 2 threads, reused
+// buffers); its stored values are the image's; rectVisible agrees with a pixel-by-pixel check of
+// the stored values on random rectangles and depths, and with what the scenes' geometry says.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <fmt/format.h>
+#include <random>
+
+#include "core/depth_map.hpp"
+#include "test_scenes.hpp"
+
+namespace hsr {
+namespace {
+
+std::vector<DepthFormat> everyFormat() {
+  std::vector<DepthFormat> formats;
+  for (const char* s : {"u16", "u24", "u32", "f32"})
+    for (const char* m : {"z", "reversed", "inv", "linear"}) formats.push_back(DepthFormat::parse(std::string(s) + ":" + m));
+  return formats;
+}
+
+Camera cameraFor(const Scene& scene, int w, int h, int pose) {
+  CameraSpec spec = scene.camera ? *scene.camera : frameBounds(scene.bounds());
+  if (pose > 0) {  // off to one side, nearer: triangles cross tiles at other angles, some clipped
+    const Bounds3 b = scene.bounds();
+    const double r = glm::length(b.hi - b.lo) * 0.5;
+    spec = test::lookAt(b.center() + dvec3(0.9 * r, 0.5 * r * pose, 1.1 * r), b.center(), 60, r * 0.05, r * 4);
+    if (pose == 2) spec.orthoHeight = r * 1.5;
+  }
+  return resolveCamera(spec, w, h, scene.bounds());
+}
+
+Frame referenceDepth(const Scene& scene, const Camera& cam, DepthFormat format) {
+  RenderOptions o;
+  o.depthFormat = format;
+  o.raster = RasterKind::HalfSpace;
+  o.outputs = FrameOutputs::DepthOnly;
+  o.threads = 1;
+  return render(scene, cam, o);
+}
+
+long firstDifference(const std::vector<float>& a, const std::vector<float>& b) {
+  if (a.size() != b.size()) return 0;
+  for (size_t i = 0; i < a.size(); ++i)
+    if (std::memcmp(&a[i], &b[i], sizeof(float)) != 0) return long(i);
+  return -1;
+}
+
+// "stored value a is nearer than b" in the format's direction.
+bool nearer(DepthFormat f, double a, double b) {
+  return f.mapping == DepthMapping::Reversed || f.mapping == DepthMapping::Inv ? a > b : a < b;
+}
+
+double storedOfEye(DepthFormat f, const Camera& cam, double eye) {
+  double q = 0;
+  visitDepthFormat(f, [&]<DepthStorage S, DepthMapping M>() {
+    q = double(quantizeDepth<S>(mapDepth<M>(eye, cam.near, cam.far, cam.orthographic)));
+  });
+  return q;
+}
+
+double eyeOfStored(DepthFormat f, const Camera& cam, double stored) {
+  double eye = 0;
+  visitDepthFormat(f, [&]<DepthStorage S, DepthMapping M>() {
+    eye = eyeDepthOfStored<S, M>(stored, cam.near, cam.far, cam.orthographic);
+  });
+  return eye;
+}
+
+const char* kScenes[] = {"builtin:cubes",         "builtin:layers?n=16", "builtin:random?n=1500",
+                         "builtin:sphere?n=8000", "builtin:zfight",      "builtin:interpenetrate",
+                         "builtin:city"};
+
+// One buffer reused across scenes, sizes and formats (stale tiles of a bigger earlier frame must
+// not show), 1 and 2 threads: the depth image equals the reference's bit for bit, and every
+// stored value maps to its pixel of the image.
+TEST(Occlusion, DepthImageIsTheZBuffersOnEverySceneFormatAndThreadCount) {
+  OcclusionBuffer buffer;
+  int compared = 0;
+  for (const char* name : kScenes) {
+    const Scene scene = loadScene(name);
+    for (int pose = 0; pose < 3; ++pose)
+      for (auto [w, h] : {std::pair{200, 150}, std::pair{333, 97}}) {
+        const Camera cam = cameraFor(scene, w, h, pose);
+        for (const DepthFormat& format : everyFormat()) {
+          const Frame reference = referenceDepth(scene, cam, format);
+          for (int threads : {1, 2}) {
+            const std::string what = fmt::format("{} pose {} {}x{} {} threads {}", name, pose, w, h, format.name(), threads);
+            const Stats& st = buffer.render(scene, cam, {format, Cull::None, threads});
+            EXPECT_EQ(st.algorithm, "occlusion");
+            EXPECT_LE(st.depth_tests, reference.stats.depth_tests) << what;
+            Frame image;
+            buffer.depthImage(image);
+            ++compared;
+            ASSERT_TRUE(image.faceId.empty() && image.color.empty()) << what;
+            const long at = firstDifference(reference.depth, image.depth);
+            ASSERT_EQ(at, -1) << what << ": depth differs at pixel (" << at % w << ", " << at / w << "): reference "
+                              << reference.depth[size_t(at)] << ", occlusion buffer " << image.depth[size_t(at)];
+            EXPECT_EQ(image.stats.covered_pixels, reference.stats.covered_pixels) << what;
+            for (int y = 0; y < h; ++y)
+              for (int x = 0; x < w; ++x) {
+                const double stored = buffer.storedAt(x, y);
+                const float eye = image.depth[image.index(x, y)];
+                if (std::isinf(eye)) continue;  // nothing drawn (or mapped to infinity): checked below
+                ASSERT_EQ(float(eyeOfStored(format, cam, stored)), eye) << what << " pixel " << x << "," << y;
+              }
+          }
+        }
+      }
+  }
+  EXPECT_EQ(compared, 7 * 3 * 2 * 16 * 2);
+}
+
+// rectVisible against the stored values pixel by pixel: random rectangles (some partly or wholly
+// outside the image, some a single pixel) and depths, half of them exactly a stored value's eye
+// depth, so that ties (equal is not visible) are met.
+TEST(Occlusion, RectVisibleAgreesWithThePixels) {
+  OcclusionBuffer buffer;
+  std::mt19937_64 rng(7);
+  int visible = 0, hidden = 0;
+  for (const char* name : kScenes) {
+    const Scene scene = loadScene(name);
+    for (const char* fmtName : {"f32:reversed", "u16:z", "u24:inv", "u32:linear", "f32:z"}) {
+      const DepthFormat format = DepthFormat::parse(fmtName);
+      const int w = 300, h = 170;
+      const Camera cam = cameraFor(scene, w, h, int(rng() % 3));
+      buffer.render(scene, cam, {format, Cull::None, 2});
+      for (int i = 0; i < 300; ++i) {
+        const int size = i % 3 == 0 ? 1 : int(rng() % 140) + 1;
+        const int x0 = int(rng() % (w + 40)) - 20, y0 = int(rng() % (h + 40)) - 20;
+        const int x1 = x0 + int(rng() % size), y1 = y0 + int(rng() % size);
+        double eye;
+        if (i % 2 == 0) {
+          const int px = std::clamp(x0, 0, w - 1), py = std::clamp(y0, 0, h - 1);
+          eye = eyeOfStored(format, cam, buffer.storedAt(px, py));
+        } else {
+          eye = cam.near * 0.5 + double(rng() % 1000) / 1000.0 * (cam.far * 1.2 - cam.near * 0.5);
+        }
+        const double q = storedOfEye(format, cam, eye);
+        bool expected = false;
+        for (int y = std::max(y0, 0); y <= std::min(y1, h - 1) && !expected; ++y)
+          for (int x = std::max(x0, 0); x <= std::min(x1, w - 1) && !expected; ++x)
+            expected = nearer(format, q, buffer.storedAt(x, y));
+        ASSERT_EQ(buffer.rectVisible(x0, y0, x1, y1, eye), expected)
+            << name << " " << fmtName << " rect [" << x0 << ", " << x1 << "] x [" << y0 << ", " << y1 << "] eye depth "
+            << eye;
+        ++(expected ? visible : hidden);
+      }
+    }
+  }
+  // Both answers occur often enough for the comparison to mean something.
+  EXPECT_GT(visible, 1000);
+  EXPECT_GT(hidden, 1000);
+}
+
+// What the geometry says: behind the nearest of the stacked full-screen layers nothing shows;
+// in front of it, everything; an empty buffer hides nothing nearer than the far plane.
+TEST(Occlusion, LayersHideWhatIsBehindThem) {
+  const Scene layers = loadScene("builtin:layers?n=8");
+  const Camera cam = cameraFor(layers, 256, 192, 0);
+  OcclusionBuffer buffer;
+  buffer.render(layers, cam);
+  double nearest = std::numeric_limits<double>::infinity(), farthest = 0;
+  Frame image;
+  buffer.depthImage(image);
+  for (float d : image.depth) {
+    ASSERT_TRUE(std::isfinite(d)) << "the layers cover the whole image";
+    nearest = std::min(nearest, double(d));
+    farthest = std::max(farthest, double(d));
+  }
+  EXPECT_FALSE(buffer.rectVisible(0, 0, 255, 191, farthest * 1.01));
+  EXPECT_FALSE(buffer.rectVisible(-100, -100, 1000, 1000, cam.far));
+  EXPECT_TRUE(buffer.rectVisible(0, 0, 255, 191, nearest * 0.99));
+  EXPECT_TRUE(buffer.rectVisible(100, 100, 100, 100, nearest * 0.99));
+  EXPECT_FALSE(buffer.rectVisible(300, 0, 400, 10, nearest * 0.99)) << "outside the image";
+  EXPECT_FALSE(buffer.rectVisible(10, 10, 9, 20, nearest * 0.99)) << "empty rectangle";
+
+  Scene empty;
+  empty.finalize();
+  buffer.render(empty, cam);
+  EXPECT_TRUE(buffer.rectVisible(0, 0, 0, 0, cam.far * 0.99));
+  EXPECT_TRUE(buffer.rectVisible(0, 0, 255, 191, cam.near));
+  EXPECT_EQ(buffer.width(), 256);
+}
+
+TEST(Occlusion, BadUseIsAClearError) {
+  OcclusionBuffer buffer;
+  EXPECT_THROW(buffer.rectVisible(0, 0, 1, 1, 1.0), InputError);
+  EXPECT_THROW(buffer.storedAt(0, 0), InputError);
+  Frame frame;
+  EXPECT_THROW(buffer.depthImage(frame), InputError);
+  const Scene scene = loadScene("builtin:cubes");
+  Camera cam = cameraFor(scene, 64, 48, 0);
+  buffer.render(scene, cam);
+  EXPECT_THROW(buffer.rectVisible(0, 0, 1, 1, std::nan("")), InputError);
+  EXPECT_THROW(buffer.storedAt(64, 0), InputError);
+  EXPECT_THROW(buffer.storedAt(0, -1), InputError);
+  Camera huge = cam;
+  huge.width = 0;
+  EXPECT_THROW(buffer.render(scene, huge), InputError);
+  EXPECT_EQ(buffer.width(), 0) << "a failed render leaves nothing to query";
+  EXPECT_THROW(buffer.rectVisible(0, 0, 1, 1, 1.0), InputError);
+}
+
+}  // namespace
+}  // namespace hsr
