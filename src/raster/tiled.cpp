@@ -60,7 +60,7 @@ namespace {
 
 // Appends (tile << 32 | index) for each tile triangle `index` may cover: the tiles its box
 // overlaps, less those that one edge excludes (all four corner pixel centres of the box's part
-// outside).
+// outside: the edge function is linear, so it is enough that the corner where it is largest is).
 void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector<uint64_t>& pairs) {
   const int tx0 = t.minX / kTileSize, tx1 = t.maxX / kTileSize;
   const int ty0 = t.minY / kTileSize, ty1 = t.maxY / kTileSize;
@@ -74,12 +74,8 @@ void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector
     for (int tx = tx0; tx <= tx1; ++tx) {
       const int x0 = std::max<int>(tx * kTileSize, t.minX), x1 = std::min<int>(tx * kTileSize + kTileSize - 1, t.maxX);
       bool outside = false;
-      for (const Edge& edge : e) {
-        bool anyInside = false;
-        for (int c = 0; c < 4; ++c)
-          anyInside |= edge.at(centerFixed(c & 1 ? x1 : x0), centerFixed(c & 2 ? y1 : y0)) >= edge.bias;
-        outside |= !anyInside;
-      }
+      for (const Edge& edge : e)  // E grows with x when -dy > 0, with y when dx > 0
+        outside |= edge.at(centerFixed(edge.dy < 0 ? x1 : x0), centerFixed(edge.dx > 0 ? y1 : y0)) < edge.bias;
       if (!outside) pairs.push_back(uint64_t(ty * tilesX + tx) << 32 | index);
     }
   }
