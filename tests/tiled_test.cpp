@@ -264,6 +264,27 @@ TEST(Tiled, BinsAreInSubmissionOrderWhateverTheChunkOrder) {
       EXPECT_TRUE(listed.count({i, t})) << "triangle " << i << " covers (" << x << ", " << y << ") but is not in tile " << t;
     });
   EXPECT_GT(entries - all.size(), 100u);  // some triangles were binned to several tiles
+  // And no more than the tiles of its box that no edge excludes (each edge tested at all four
+  // corner pixel centres of the box's part in the tile), pair for pair.
+  std::set<std::pair<size_t, size_t>> expected;
+  for (size_t i = 0; i < all.size(); ++i) {
+    const SetupTriangle& t = all[i];
+    const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
+    for (int ty = t.minY / tiled::kTileSize; ty <= t.maxY / tiled::kTileSize; ++ty)
+      for (int tx = t.minX / tiled::kTileSize; tx <= t.maxX / tiled::kTileSize; ++tx) {
+        const int x0 = std::max<int>(tx * tiled::kTileSize, t.minX), x1 = std::min<int>(tx * tiled::kTileSize + tiled::kTileSize - 1, t.maxX);
+        const int y0 = std::max<int>(ty * tiled::kTileSize, t.minY), y1 = std::min<int>(ty * tiled::kTileSize + tiled::kTileSize - 1, t.maxY);
+        bool excluded = false;
+        for (const Edge& edge : e) {
+          bool anyInside = false;
+          for (int c = 0; c < 4; ++c)
+            anyInside |= edge.at(centerFixed(c & 1 ? x1 : x0), centerFixed(c & 2 ? y1 : y0)) >= edge.bias;
+          excluded |= !anyInside;
+        }
+        if (!excluded) expected.insert({i, size_t(ty * tilesX + tx)});
+      }
+  }
+  EXPECT_EQ(listed, expected);
 }
 
 // Depth only: no ids, no colour; depth is the stored value mapped back, identical to the

@@ -61,6 +61,9 @@ namespace {
 // Appends (tile << 32 | index) for each tile triangle `index` may cover: the tiles its box
 // overlaps, less those that one edge excludes (all four corner pixel centres of the box's part
 // outside: the edge function is linear, so it is enough that the corner where it is largest is).
+// Along a row of tiles that corner moves monotonically, so each edge keeps an interval of the
+// row's tiles and so do all three: the row's ends are tested until a tile passes, the tiles
+// between them are the triangle's without a test.
 void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector<uint64_t>& pairs) {
   const int tx0 = t.minX / kTileSize, tx1 = t.maxX / kTileSize;
   const int ty0 = t.minY / kTileSize, ty1 = t.maxY / kTileSize;
@@ -71,13 +74,18 @@ void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector
   const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
   for (int ty = ty0; ty <= ty1; ++ty) {
     const int y0 = std::max<int>(ty * kTileSize, t.minY), y1 = std::min<int>(ty * kTileSize + kTileSize - 1, t.maxY);
-    for (int tx = tx0; tx <= tx1; ++tx) {
+    auto inside = [&](int tx) {  // no edge has all of the tile's part of the box outside
       const int x0 = std::max<int>(tx * kTileSize, t.minX), x1 = std::min<int>(tx * kTileSize + kTileSize - 1, t.maxX);
       bool outside = false;
       for (const Edge& edge : e)  // E grows with x when -dy > 0, with y when dx > 0
         outside |= edge.at(centerFixed(edge.dy < 0 ? x1 : x0), centerFixed(edge.dx > 0 ? y1 : y0)) < edge.bias;
-      if (!outside) pairs.push_back(uint64_t(ty * tilesX + tx) << 32 | index);
-    }
+      return !outside;
+    };
+    int first = tx0, last = tx1;
+    while (first <= last && !inside(first)) ++first;
+    while (last > first && !inside(last)) --last;
+    const uint64_t rowKey = uint64_t(ty * tilesX) << 32 | index;
+    for (int tx = first; tx <= last; ++tx) pairs.push_back(rowKey + (uint64_t(tx) << 32));
   }
 }
 
