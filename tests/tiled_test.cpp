@@ -403,6 +403,42 @@ TEST(Tiled, TrianglesInFrontOfAWholeTileReplaceIt) {
   }
 }
 
+// Binning with the frame's depth setup leaves out the pairs of triangles behind a triangle that
+// covers the tile whole (layers: every layer but the nearest, off the diagonal), counts them, and
+// keeps the rest as they were; the image does not change (the identity tests above bin this way).
+TEST(Tiled, TrianglesBehindATriangleCoveringTheTileAreNotBinned) {
+  const Scene scene = loadScene("builtin:layers?n=16");
+  const Camera cam = resolveCamera(*scene.camera, 1000, 600, scene.bounds());
+  for (const char* f : {"f32:reversed", "u16:z", "u24:inv", "u32:linear"}) {
+    const DepthSetup depth{DepthFormat::parse(f), cam.near, cam.far, cam.orthographic};
+    FrontEndOutput fe;
+    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
+    ASSERT_EQ(fe.chunkCount, 1u);
+    tiled::Bins all, culled;
+    tiled::prepareBins(all, cam.width, cam.height, fe.chunkCount);
+    tiled::prepareBins(culled, cam.width, cam.height, fe.chunkCount);
+    for (size_t c = 0; c < fe.chunkCount; ++c) {
+      tiled::binChunk(all, c, fe.chunks[c]);
+      tiled::binChunk(culled, c, fe.chunks[c], &depth);
+    }
+    size_t allEntries = 0, culledEntries = 0;
+    for (int t = 0; t < all.tileCount(); ++t) {
+      allEntries += all.entries(t);
+      culledEntries += culled.entries(t);
+      // What is kept is a sublist, in the same order, holding the nearest layer.
+      std::vector<uint32_t> a(all.chunks[0].items.begin() + all.chunks[0].start[size_t(t)],
+                              all.chunks[0].items.begin() + all.chunks[0].start[size_t(t) + 1]);
+      std::vector<uint32_t> k(culled.chunks[0].items.begin() + culled.chunks[0].start[size_t(t)],
+                              culled.chunks[0].items.begin() + culled.chunks[0].start[size_t(t) + 1]);
+      EXPECT_TRUE(std::includes(a.begin(), a.end(), k.begin(), k.end())) << f << " tile " << t;
+      EXPECT_FALSE(k.empty()) << f << " tile " << t;
+    }
+    EXPECT_EQ(all.culled(), 0u);
+    EXPECT_EQ(culled.culled(), allEntries - culledEntries) << f;
+    EXPECT_LT(culledEntries * 2, allEntries) << f;  // (the tiles the diagonal crosses keep every layer)
+  }
+}
+
 // The order-free depth test: a fragment equal to the stored value wins when its triangle was
 // submitted first. Two identical triangles (equal depth everywhere): the second is given a
 // nearer (still valid) bound, so its tile visits it first; the first must still win every pixel,

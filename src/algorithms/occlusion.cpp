@@ -78,7 +78,7 @@ const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, c
   st.faces = scene.faceCount();
   st.triangles = scene.triangles.size();
   st.depth_format = opt.depthFormat.name();
-  algo::tiledStats(st, im.state.fe, counters);
+  algo::tiledStats(st, im.state.fe, &bins, counters);
   st.memory_bytes = im.state.memoryBytes() + im.tileCapacity * sizeof(tiled::TileScratch) + im.state.fe.memoryBytes();
   st.addTime("total", total.ms());
   im.width = camera.width;

@@ -26,7 +26,7 @@ void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt
                  TiledState& state) {
   tiled::prepareBins(state.bins, cam.width, cam.height, (scene.triangles.size() + kChunkTriangles - 1) / kChunkTriangles);
   runFrontEnd(
-      scene, cam, opt, state.fe, [&](size_t chunk) { tiled::binChunk(state.bins, chunk, state.fe.chunks[chunk]); },
+      scene, cam, opt, state.fe, [&](size_t chunk) { tiled::binChunk(state.bins, chunk, state.fe.chunks[chunk], &depth); },
       &depth);
 }
 
@@ -46,13 +46,14 @@ int prepareTilePass(TiledState& state, int threads) {
   return workers;
 }
 
-void tiledStats(Stats& st, const FrontEndOutput& fe, const tiled::RasterCounters& counters) {
+void tiledStats(Stats& st, const FrontEndOutput& fe, const tiled::Bins* bins, const tiled::RasterCounters& counters) {
   st.triangles_clipped = fe.clipped;
   st.triangles_degenerate = fe.degenerate;
   st.culled_backface = fe.culledBackface;
   st.culled_frustum = fe.culledFrustum;
-  // Triangle-tile pairs skipped because the triangle lies behind all the tile holds.
-  st.culled_occlusion = counters.culledTiles;
+  // Triangle-tile pairs skipped because the triangle lies behind all the tile holds: when
+  // binned (behind a triangle covering the tile) or when the tile was rasterized.
+  st.culled_occlusion = counters.culledTiles + (bins ? bins->culled() : 0);
   // Only fragments not rejected early by a tile, block or row bound are compared.
   st.depth_tests = counters.depthTests;
   st.depth_writes = counters.depthWrites;

@@ -37,8 +37,8 @@ void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt
 int prepareTilePass(TiledState& state, int threads);
 
 /// The statistics every tiled pass reports (CONVENTIONS.md keys): the front end's counts and the
-/// tile pass's tests, writes and triangle-tile pairs culled. covered_pixels, colour writes,
+/// tile pass's tests, writes and triangle-tile pairs culled (with `bins`: also those culled when binned). covered_pixels, colour writes,
 /// memory and times are the caller's.
-void tiledStats(Stats& st, const FrontEndOutput& fe, const tiled::RasterCounters& counters);
+void tiledStats(Stats& st, const FrontEndOutput& fe, const tiled::Bins* bins, const tiled::RasterCounters& counters);
 
 }  // namespace hsr::algo

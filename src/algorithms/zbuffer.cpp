@@ -176,7 +176,7 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
     tiledCounters.depthTests = n.tests;
     tiledCounters.depthWrites = n.writes;
   }
-  tiledStats(st, fe, tiledCounters);
+  tiledStats(st, fe, isTiled ? &state.bins : nullptr, tiledCounters);
   // Fragments that won the depth test: each writes the colour in the reference; the tiled path
   // writes the winner's id instead and its colour once per pixel at resolve (deferred), counted
   // like the reference, one per winning fragment.

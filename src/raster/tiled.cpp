@@ -35,11 +35,17 @@ size_t Bins::entries(int tile) const {
   return n;
 }
 
+uint64_t Bins::culled() const {
+  uint64_t n = 0;
+  for (size_t c = 0; c < chunkCount; ++c) n += chunks[c].culled;
+  return n;
+}
+
 uint64_t Bins::memoryBytes() const {
   uint64_t bytes = triangles.capacity() * sizeof(void*);
   for (const ChunkBins& c : chunks)
     bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.pairs.capacity() * sizeof(uint64_t) +
-             c.itemNearest.capacity() * sizeof(double) + sizeof(c);
+             (c.itemNearest.capacity() + c.cover.capacity()) * sizeof(double) + sizeof(c);
   return bytes;
 }
 
@@ -64,11 +70,21 @@ namespace {
 // Along a row of tiles that corner moves monotonically, so each edge keeps an interval of the
 // row's tiles and so do all three: the row's ends are tested until a tile passes, the tiles
 // between them are the triangle's without a test.
-void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector<uint64_t>& pairs) {
+// With `cover` (binChunk's cull), tiles whose covering bound is strictly nearer than `nearest`
+// (in the direction `greater`) are left out and counted in `culled`.
+void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector<uint64_t>& pairs,
+                 const double* cover = nullptr, double nearest = 0, bool greater = false, uint64_t* culled = nullptr) {
   const int tx0 = t.minX / kTileSize, tx1 = t.maxX / kTileSize;
   const int ty0 = t.minY / kTileSize, ty1 = t.maxY / kTileSize;
+  auto hidden = [&](int tile) {
+    if (!cover) return false;
+    const double c = cover[tile];
+    const bool behind = greater ? c > nearest : c < nearest;
+    *culled += behind;
+    return behind;
+  };
   if (tx0 == tx1 && ty0 == ty1) {
-    pairs.push_back(uint64_t(ty0 * tilesX + tx0) << 32 | index);
+    if (!hidden(ty0 * tilesX + tx0)) pairs.push_back(uint64_t(ty0 * tilesX + tx0) << 32 | index);
     return;
   }
   const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
@@ -85,7 +101,54 @@ void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector
     while (first <= last && !inside(first)) ++first;
     while (last > first && !inside(last)) --last;
     const uint64_t rowKey = uint64_t(ty * tilesX) << 32 | index;
-    for (int tx = first; tx <= last; ++tx) pairs.push_back(rowKey + (uint64_t(tx) << 32));
+    for (int tx = first; tx <= last; ++tx)
+      if (!hidden(ty * tilesX + tx)) pairs.push_back(rowKey + (uint64_t(tx) << 32));
+  }
+}
+
+// Per tile, the nearest of the farthest bounds of the chunk's triangles that cover all of the
+// tile's pixel centres in the image (each edge's function at its smallest corner is inside; along
+// a row of tiles that corner moves monotonically, so the covered tiles are an interval of the
+// row). Only triangles whose box can hold a whole tile are looked at.
+template <DepthStorage S, DepthMapping M>
+void coverBounds(const std::vector<SetupTriangle>& tris, const DepthSetup& depth, int width, int height, int tilesX,
+                 std::vector<double>& cover) {
+  constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
+  for (const SetupTriangle& t : tris) {
+    if (std::min(t.maxX - t.minX, t.maxY - t.minY) + 1 < std::min({kTileSize, width, height})) continue;
+    const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
+    double far = 0;
+    bool farKnown = false;  // computed for the first tile covered
+    for (int ty = (t.minY + kTileSize - 1) / kTileSize; ty * kTileSize <= t.maxY; ++ty) {
+      const int y0 = ty * kTileSize, y1 = std::min(y0 + kTileSize, height) - 1;
+      if (y1 > t.maxY) break;
+      auto covered = [&](int tx) {  // every pixel centre of the tile's part of the image is inside
+        const int x0 = tx * kTileSize, x1 = std::min(x0 + kTileSize, width) - 1;
+        if (x0 < t.minX || x1 > t.maxX) return false;
+        bool inside = true;
+        for (const Edge& edge : e)  // E grows with x when -dy > 0, with y when dx > 0
+          inside &= edge.at(centerFixed(edge.dy < 0 ? x0 : x1), centerFixed(edge.dx > 0 ? y0 : y1)) >= edge.bias;
+        return inside;
+      };
+      int first = (t.minX + kTileSize - 1) / kTileSize, last = t.maxX / kTileSize;
+      while (first <= last && !covered(first)) ++first;
+      while (last > first && !covered(last)) --last;
+      if (first > last) continue;
+      if (!farKnown) {
+        double px[3], py[3];
+        for (int i = 0; i < 3; ++i) {
+          px[i] = double(t.x[i]) / double(kSubpixelOne);
+          py[i] = double(t.y[i]) / double(kSubpixelOne);
+        }
+        const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, depth.near, depth.far, depth.orthographic);
+        far = storedRange<S, M>(m, px, py, 3).farthest;  // "none" (farthest possible) culls nothing
+        farKnown = true;
+      }
+      for (int tx = first; tx <= last; ++tx) {
+        double& c = cover[size_t(ty * tilesX + tx)];
+        if (greater ? far > c : far < c) c = far;
+      }
+    }
   }
 }
 
@@ -101,7 +164,7 @@ void prepareBins(Bins& bins, int width, int height, size_t chunkCount) {
   bins.triangles.assign(chunkCount, nullptr);
 }
 
-void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles) {
+void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const DepthSetup* cullFor) {
   ChunkBins& cb = bins.chunks[chunk];
   const std::vector<SetupTriangle>& tris = triangles.triangles;
   if (triangles.nearest.size() != tris.size())
@@ -109,7 +172,18 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles) {
   bins.triangles[chunk] = tris.data();
   const size_t n = tris.size(), tiles = size_t(bins.tileCount());
   cb.pairs.clear();
-  for (size_t i = 0; i < n; ++i) binTriangle(tris[i], uint32_t(i), bins.tilesX, cb.pairs);
+  cb.culled = 0;
+  if (cullFor) {
+    const bool greater = cullFor->format.mapping == DepthMapping::Reversed || cullFor->format.mapping == DepthMapping::Inv;
+    cb.cover.assign(tiles, greater ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity());
+    visitDepthFormat(cullFor->format, [&]<DepthStorage S, DepthMapping M>() {
+      coverBounds<S, M>(tris, *cullFor, bins.width, bins.height, bins.tilesX, cb.cover);
+    });
+    for (size_t i = 0; i < n; ++i)
+      binTriangle(tris[i], uint32_t(i), bins.tilesX, cb.pairs, cb.cover.data(), triangles.nearest[i], greater, &cb.culled);
+  } else {
+    for (size_t i = 0; i < n; ++i) binTriangle(tris[i], uint32_t(i), bins.tilesX, cb.pairs);
+  }
   // Counting sort by tile, stable: each tile's triangles stay in submission order.
   cb.start.assign(tiles + 1, 0);
   for (uint64_t p : cb.pairs) ++cb.start[(p >> 32) + 1];

@@ -59,6 +59,8 @@ struct ChunkBins {
   std::vector<uint32_t> items;  // indices into the chunk's triangles
   std::vector<double> itemNearest;  // per item: its triangle's nearest bound (FrontEndChunk::nearest)
   std::vector<uint64_t> pairs;  // scratch of binChunk(): tile << 32 | index, in submission order
+  std::vector<double> cover;    // scratch of binChunk(): per tile, the bound of its covering triangles
+  uint64_t culled = 0;          // triangle-tile pairs not binned: behind a triangle covering the tile
 };
 
 /// Per-tile triangle lists of a frame: chunk by chunk, so that each chunk is binned by the worker
@@ -73,6 +75,7 @@ struct Bins {
 
   int tileCount() const { return tilesX * tilesY; }
   size_t entries(int tile) const;
+  uint64_t culled() const;  // pairs binChunk left out (ChunkBins::culled), over all chunks
   uint64_t memoryBytes() const;
   const SetupTriangle& triangle(uint64_t key) const { return triangles[(key - 1) >> 32][uint32_t(key - 1)]; }
 };
@@ -155,8 +158,17 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater
 /// chunk's `nearest` bounds, from runFrontEnd with the frame's depth setup, are kept for the
 /// kernel). Chunks share no output, so binChunk runs on any thread, in any order (as
 /// runFrontEnd's consumer).
+///
+/// With `cullFor` (the frame's depth setup), a triangle is not binned to a tile that a triangle
+/// of the same chunk covers whole (every pixel centre of the tile's part of the image) when its
+/// nearest bound is strictly farther than that one's farthest bound (storedRange over its
+/// vertices): whatever the order, the z-buffer ends with every pixel of the tile at least as
+/// near as the covering triangle's fragment there, so the culled triangle could neither win nor
+/// tie anywhere in it (the image stays bit for bit; counted in ChunkBins::culled). Bounded per
+/// chunk, so the bins do not depend on the thread count. On stacked screen-filling layers this
+/// drops nearly every pair before it is sorted, ordered or visited.
 void prepareBins(Bins& bins, int width, int height, size_t chunkCount);
-void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles);
+void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const DepthSetup* cullFor = nullptr);
 
 /// Rasterizes every triangle binned to `tile` into `scratch` (cleared first), visiting them in
 /// orderTile's order (lists in `order`). With ids false, only depth is kept (no triangle ids).
