@@ -186,16 +186,75 @@ TEST(Occlusion, LayersHideWhatIsBehindThem) {
   EXPECT_EQ(buffer.width(), 256);
 }
 
+// boxVisible is conservative: a box whose faces, drawn after the occluders by the z-buffer, win
+// any pixel is reported visible (every format); and it is useful: most boxes that win nothing
+// are reported hidden. Boxes at random over and around the occluders, some crossing the near
+// plane, some beyond the far plane, some thin.
+TEST(Occlusion, BoxVisibleNeverHidesAVisibleBox) {
+  std::mt19937_64 rng(11);
+  auto u = [&] { return double(rng() >> 11) * 0x1.0p-53; };
+  int shown = 0, hiddenTruth = 0, hiddenReported = 0;
+  for (const char* name : {"builtin:layers?n=4", "builtin:city", "builtin:cubes"}) {
+    const Scene occluders = loadScene(name);
+    const Bounds3 b = occluders.bounds();
+    const Camera cam = cameraFor(occluders, 160, 120, 0);
+    for (const char* f : {"f32:reversed", "u16:z", "u24:inv", "u32:linear"}) {
+      const DepthFormat format = DepthFormat::parse(f);
+      OcclusionBuffer buffer;
+      buffer.render(occluders, cam, {format, Cull::None, 1});
+      for (int i = 0; i < 40; ++i) {
+        const dvec3 size = (b.hi - b.lo) * dvec3(0.02 + 0.2 * u(), 0.02 + 0.2 * u(), i % 7 == 0 ? 0.0 : 0.02 + 0.2 * u());
+        const dvec3 lo = b.lo - (b.hi - b.lo) * 0.3 + (b.hi - b.lo) * 1.6 * dvec3(u(), u(), u());
+        Scene scene = occluders;
+        scene.beginMesh("box");
+        test::addBox(scene, lo, lo + size, {255, 255, 255, 255});
+        scene.finalize();
+        RenderOptions o;
+        o.depthFormat = format;
+        o.outputs = FrameOutputs::IdsAndDepth;
+        o.threads = 1;
+        const Frame frame = render(scene, cam, o);
+        const int firstBoxFace = int(occluders.faceCount());
+        bool truth = false;
+        for (int32_t id : frame.faceId) truth |= id >= firstBoxFace;
+        Bounds3 box;
+        box.add(lo);
+        box.add(lo + size);
+        const bool reported = buffer.boxVisible(box);
+        if (truth) {
+          ++shown;
+          ASSERT_TRUE(reported) << name << " " << f << " box " << lo.x << "," << lo.y << "," << lo.z << " size " << size.x
+                                << "," << size.y << "," << size.z << " shows but was reported hidden";
+        } else {
+          ++hiddenTruth;
+          hiddenReported += !reported;
+        }
+      }
+    }
+  }
+  RecordProperty("shown", shown);
+  RecordProperty("hidden", hiddenTruth);
+  RecordProperty("hidden_reported", hiddenReported);
+  EXPECT_GT(shown, 50);
+  EXPECT_GT(hiddenTruth, 50);
+  EXPECT_GT(hiddenReported * 2, hiddenTruth) << "most hidden boxes are found hidden";
+}
+
 TEST(Occlusion, BadUseIsAClearError) {
   OcclusionBuffer buffer;
   EXPECT_THROW(buffer.rectVisible(0, 0, 1, 1, 1.0), InputError);
   EXPECT_THROW(buffer.storedAt(0, 0), InputError);
+  EXPECT_THROW(buffer.boxVisible(Bounds3{}), InputError);
   Frame frame;
   EXPECT_THROW(buffer.depthImage(frame), InputError);
   const Scene scene = loadScene("builtin:cubes");
   Camera cam = cameraFor(scene, 64, 48, 0);
   buffer.render(scene, cam);
   EXPECT_THROW(buffer.rectVisible(0, 0, 1, 1, std::nan("")), InputError);
+  Bounds3 nanBox;
+  nanBox.lo = dvec3(0, std::nan(""), 0);
+  nanBox.hi = dvec3(1, 1, 1);
+  EXPECT_THROW(buffer.boxVisible(nanBox), InputError);
   EXPECT_THROW(buffer.storedAt(64, 0), InputError);
   EXPECT_THROW(buffer.storedAt(0, -1), InputError);
   Camera huge = cam;

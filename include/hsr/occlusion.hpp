@@ -11,7 +11,7 @@
 //
 //   hsr::OcclusionBuffer buffer;
 //   buffer.render(occluders, camera);                       // replaces what it held
-//   if (buffer.rectVisible(x0, y0, x1, y1, nearestEyeDepth)) draw(object);
+//   if (buffer.boxVisible(object.bounds)) draw(object);        // or rectVisible(pixels, depth)
 #pragma once
 #include <hsr/camera.hpp>
 #include <hsr/depth_format.hpp>
@@ -55,6 +55,14 @@ class OcclusionBuffer {
   /// outside the image, or empty (x1 < x0 or y1 < y0), is not visible. Throws InputError for a
   /// NaN depth, or before the first render().
   bool rectVisible(int x0, int y0, int x1, int y1, double eyeDepth) const;
+
+  /// Could any part of the world-space box show, drawn after the occluders? Conservative: false
+  /// only when no fragment of the box's faces could pass the depth test — the box projected to
+  /// the pixel rectangle around its corners, its nearest corner's eye depth tested as
+  /// rectVisible does, one storage step nearer (room for a fragment's rounding). A box reaching
+  /// the near plane (or behind the eye) is visible; one wholly beyond the far plane is not.
+  /// Throws InputError before the first render() or for a box with NaN corners.
+  bool boxVisible(const Bounds3& box) const;
 
   /// The value stored at pixel (x, y): the format's integer code or float, as a double (the
   /// clear value where nothing was drawn). Throws InputError outside the image.

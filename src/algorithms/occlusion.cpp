@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <limits>
 
 #include "algorithms/algorithms.hpp"
 #include "algorithms/tiled_pass.hpp"
@@ -23,11 +24,47 @@ struct OcclusionBuffer::Impl {
   std::unique_ptr<tiled::TileScratch[]> tiles;
   size_t tileCapacity = 0;
   DepthSetup depth;
+  Camera camera;
   Stats stats;
   int threads = 1;
   int width = 0, height = 0;  // of the last completed render (0: nothing rendered)
 
   int tileOf(int x, int y) const { return (y / tiled::kTileSize) * state.bins.tilesX + x / tiled::kTileSize; }
+
+  // Whether some pixel of the rectangle (clipped to the image) stores a value farther than q.
+  bool anyFarther(int x0, int y0, int x1, int y1, double q) const {
+    x0 = std::max(x0, 0);
+    y0 = std::max(y0, 0);
+    x1 = std::min(x1, width - 1);
+    y1 = std::min(y1, height - 1);
+    constexpr int T = tiled::kTileSize;
+    for (int ty = y0 / T; y1 >= y0 && ty <= y1 / T; ++ty)
+      for (int tx = x0 / T; x1 >= x0 && tx <= x1 / T; ++tx) {
+        const int tile = ty * state.bins.tilesX + tx;
+        if (tiled::anyFarther(state.bins, tile, depth, tiles[size_t(tile)], std::max(x0 - tx * T, 0),
+                              std::max(y0 - ty * T, 0), std::min(x1 - tx * T, T - 1), std::min(y1 - ty * T, T - 1), q))
+          return true;
+      }
+    return false;
+  }
+
+  // The value a fragment at eye depth d stores by the mapping, `steps` storage steps nearer.
+  double storedOf(double d, int steps) const {
+    double q = 0;
+    visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() {
+      constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
+      const DepthT<S> v = quantizeDepth<S>(mapDepth<M>(d, depth.near, depth.far, depth.orthographic));
+      q = double(v);
+      for (int i = 0; i < steps; ++i) {
+        if constexpr (S == DepthStorage::F32)
+          q = double(std::nextafter(float(q), greater ? std::numeric_limits<float>::infinity()
+                                                      : -std::numeric_limits<float>::infinity()));
+        else
+          q += greater ? 1.0 : -1.0;
+      }
+    });
+    return q;
+  }
 };
 
 OcclusionBuffer::OcclusionBuffer() : impl_(std::make_unique<Impl>()) {}
@@ -49,6 +86,7 @@ const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, c
   opt.threads = options.threads;
   opt.outputs = FrameOutputs::DepthOnly;
   im.threads = resolveThreads(options.threads);
+  im.camera = camera;
   im.depth = DepthSetup{opt.depthFormat, camera.near, camera.far, camera.orthographic};
   algo::setUpAndBin(scene, camera, opt, im.depth, im.state);
   Stats& st = im.stats;
@@ -96,24 +134,34 @@ bool OcclusionBuffer::rectVisible(int x0, int y0, int x1, int y1, double eyeDept
   const Impl& im = *impl_;
   requireRendered(width(), "rectVisible");
   if (std::isnan(eyeDepth)) throw InputError("rectVisible: the depth is NaN");
-  x0 = std::max(x0, 0);
-  y0 = std::max(y0, 0);
-  x1 = std::min(x1, width() - 1);
-  y1 = std::min(y1, height() - 1);
-  if (x1 < x0 || y1 < y0) return false;
-  double q = 0;
-  visitDepthFormat(im.depth.format, [&]<DepthStorage S, DepthMapping M>() {
-    q = double(quantizeDepth<S>(mapDepth<M>(eyeDepth, im.depth.near, im.depth.far, im.depth.orthographic)));
-  });
-  constexpr int T = tiled::kTileSize;
-  for (int ty = y0 / T; ty <= y1 / T; ++ty)
-    for (int tx = x0 / T; tx <= x1 / T; ++tx) {
-      const int tile = ty * im.state.bins.tilesX + tx;
-      if (tiled::anyFarther(im.state.bins, tile, im.depth, im.tiles[size_t(tile)], std::max(x0 - tx * T, 0),
-                            std::max(y0 - ty * T, 0), std::min(x1 - tx * T, T - 1), std::min(y1 - ty * T, T - 1), q))
-        return true;
-    }
-  return false;
+  return im.anyFarther(x0, y0, x1, y1, im.storedOf(eyeDepth, 0));
+}
+
+bool OcclusionBuffer::boxVisible(const Bounds3& box) const {
+  const Impl& im = *impl_;
+  requireRendered(width(), "boxVisible");
+  if (glm::any(glm::isnan(box.lo)) || glm::any(glm::isnan(box.hi))) throw InputError("boxVisible: the box has NaN corners");
+  if (box.empty()) return false;
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  double minX = inf, minY = inf, maxX = -inf, maxY = -inf, nearest = inf;
+  for (int c = 0; c < 8; ++c) {
+    const dvec3 corner(c & 1 ? box.hi.x : box.lo.x, c & 2 ? box.hi.y : box.lo.y, c & 4 ? box.hi.z : box.lo.z);
+    const dvec4 h = im.camera.toPixelH(corner);
+    if (!(h.z > im.camera.near) || !(h.w > 0)) return true;  // reaches the near plane: no bound here
+    const double px = h.x / h.w, py = h.y / h.w;
+    minX = std::min(minX, px);
+    maxX = std::max(maxX, px);
+    minY = std::min(minY, py);
+    maxY = std::max(maxY, py);
+    nearest = std::min(nearest, h.z);
+  }
+  if (nearest > im.camera.far) return false;  // wholly beyond the far plane: clipped away
+  // Pixels whose centres the box's faces may cover (vertices snap by at most 1/512 pixel),
+  // clamped before conversion so that huge coordinates cannot overflow.
+  auto pixel = [&](double v, int size) { return int(std::clamp(std::floor(v), -1.0, double(size))); };
+  const int x0 = pixel(minX - 0.5 - 0.01, im.width), x1 = pixel(maxX - 0.5 + 0.01, im.width) + 1;
+  const int y0 = pixel(minY - 0.5 - 0.01, im.height), y1 = pixel(maxY - 0.5 + 0.01, im.height) + 1;
+  return im.anyFarther(x0, y0, x1, y1, im.storedOf(nearest, 1));
 }
 
 double OcclusionBuffer::storedAt(int x, int y) const {
