@@ -313,7 +313,7 @@ TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
     if (kind == 3) p[2] = p[0] + (p[1] - p[0]) * 0.5 + dvec2(0, 0.01);          // sliver
   });
   const auto& [vertices, index, tri, face] = soup;
-  const Camera cam = pixelCamera();
+  const Camera cam = pixelCamera(100, 80);  // (boxes of 64 x 64 pixels fit: counters.large)
   int targets = 0;
   for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
     hwy::SetSupportedTargetsForTest(target);
@@ -340,9 +340,11 @@ TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
       EXPECT_EQ(scalarCounts.culledBackface, batchCounts.culledBackface) << what;
       EXPECT_EQ(scalarCounts.culledFrustum, batchCounts.culledFrustum) << what;
       EXPECT_EQ(scalarCounts.empty, batchCounts.empty) << what;
+      EXPECT_EQ(scalarCounts.large, batchCounts.large) << what;
       if (cull == Cull::None) {
         EXPECT_GT(scalarCounts.degenerate, 100u);
         EXPECT_GT(scalarCounts.empty, 10u);
+        EXPECT_GT(scalarCounts.large, 10u);
         EXPECT_GT(scalar.size(), 1000u);
       }
     }

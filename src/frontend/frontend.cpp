@@ -169,6 +169,7 @@ bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, c
   else planesThrough(px, py, num, den, t.depthNum, t.depthDen);
   t.triangle = triIndex;
   t.face = face;
+  counters.large += boxX1 - boxX0 + 1 >= kLargeBoxPixels && boxY1 - boxY0 + 1 >= kLargeBoxPixels;
   return true;
 }
 

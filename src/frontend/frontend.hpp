@@ -79,14 +79,20 @@ struct ProjectedVertex {
 struct FrontEndCounters {
   uint64_t clipped = 0, culledBackface = 0, culledFrustum = 0, degenerate = 0;
   uint64_t empty = 0;  // on screen, but covering no pixel centre (not in the statistics)
+  // Set up with a pixel box at least kLargeBoxPixels wide and tall (not in the statistics): only
+  // these can cover a whole 64x64 tile, which binning looks for (raster/tiled.hpp, binChunk).
+  uint64_t large = 0;
   void add(const FrontEndCounters& o) {
     clipped += o.clipped;
     culledBackface += o.culledBackface;
     culledFrustum += o.culledFrustum;
     degenerate += o.degenerate;
     empty += o.empty;
+    large += o.large;
   }
 };
+
+inline constexpr int kLargeBoxPixels = 64;
 
 /// Scene triangles per chunk of front-end work: fixed, so results never depend on the thread
 /// count; small enough that a chunk's set-up triangles (<= 7 pieces a triangle when clipped,

@@ -253,6 +253,8 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     counters.empty += hn::CountTrue(d, hn::And(live, empty));  // (empty excludes noBox)
     const M survivors = hn::AndNot(hn::Or(noBox, empty), live);
     if (hn::AllFalse(d, survivors)) continue;
+    const V largeBox = hn::Set(d, double(kLargeBoxPixels));
+    counters.large += hn::CountTrue(d, hn::And(survivors, hn::And(hn::Ge(bw, largeBox), hn::Ge(bh, largeBox))));
     const V nearestV = depth ? NearestStored(*depth, {na, nb, nc}, {da, db, dc}, px, py) : zero;
     HWY_ALIGN double lane[18][kSetupBatch];
     int field = 0;

@@ -70,14 +70,16 @@ namespace {
 // Along a row of tiles that corner moves monotonically, so each edge keeps an interval of the
 // row's tiles and so do all three: the row's ends are tested until a tile passes, the tiles
 // between them are the triangle's without a test.
-// With `cover` (binChunk's cull), tiles whose covering bound is strictly nearer than `nearest`
-// (in the direction `greater`) are left out and counted in `culled`.
-void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector<uint64_t>& pairs,
-                 const double* cover = nullptr, double nearest = 0, bool greater = false, uint64_t* culled = nullptr) {
+// With kCull (binChunk's cull), tiles whose covering bound in `cover` is strictly nearer than
+// `nearest` (in the direction `greater`) are left out and counted in `culled`.
+template <bool kCull>
+HWY_INLINE void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector<uint64_t>& pairs,
+                            const double* cover = nullptr, double nearest = 0, bool greater = false,
+                            uint64_t* culled = nullptr) {
   const int tx0 = t.minX / kTileSize, tx1 = t.maxX / kTileSize;
   const int ty0 = t.minY / kTileSize, ty1 = t.maxY / kTileSize;
   auto hidden = [&](int tile) {
-    if (!cover) return false;
+    if constexpr (!kCull) return false;
     const double c = cover[tile];
     const bool behind = greater ? c > nearest : c < nearest;
     *culled += behind;
@@ -109,11 +111,13 @@ void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector
 // Per tile, the nearest of the farthest bounds of the chunk's triangles that cover all of the
 // tile's pixel centres in the image (each edge's function at its smallest corner is inside; along
 // a row of tiles that corner moves monotonically, so the covered tiles are an interval of the
-// row). Only triangles whose box can hold a whole tile are looked at.
+// row). Only triangles whose box can hold a whole tile are looked at. Returns whether any tile
+// got a bound.
 template <DepthStorage S, DepthMapping M>
-void coverBounds(const std::vector<SetupTriangle>& tris, const DepthSetup& depth, int width, int height, int tilesX,
+bool coverBounds(const std::vector<SetupTriangle>& tris, const DepthSetup& depth, int width, int height, int tilesX,
                  std::vector<double>& cover) {
   constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
+  bool any = false;
   for (const SetupTriangle& t : tris) {
     if (std::min(t.maxX - t.minX, t.maxY - t.minY) + 1 < std::min({kTileSize, width, height})) continue;
     const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
@@ -148,8 +152,10 @@ void coverBounds(const std::vector<SetupTriangle>& tris, const DepthSetup& depth
         double& c = cover[size_t(ty * tilesX + tx)];
         if (greater ? far > c : far < c) c = far;
       }
+      any = true;
     }
   }
+  return any;
 }
 
 }  // namespace
@@ -173,17 +179,22 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
   const size_t n = tris.size(), tiles = size_t(bins.tileCount());
   cb.pairs.clear();
   cb.culled = 0;
-  if (cullFor) {
-    const bool greater = cullFor->format.mapping == DepthMapping::Reversed || cullFor->format.mapping == DepthMapping::Inv;
+  bool cull = false;
+  const bool greater =
+      cullFor && (cullFor->format.mapping == DepthMapping::Reversed || cullFor->format.mapping == DepthMapping::Inv);
+  static_assert(kLargeBoxPixels == kTileSize, "the front end counts the triangles that can cover a tile");
+  if (cullFor && (triangles.counters.large > 0 || bins.width < kTileSize || bins.height < kTileSize)) {
     cb.cover.assign(tiles, greater ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity());
     visitDepthFormat(cullFor->format, [&]<DepthStorage S, DepthMapping M>() {
-      coverBounds<S, M>(tris, *cullFor, bins.width, bins.height, bins.tilesX, cb.cover);
+      cull = coverBounds<S, M>(tris, *cullFor, bins.width, bins.height, bins.tilesX, cb.cover);
     });
-    for (size_t i = 0; i < n; ++i)
-      binTriangle(tris[i], uint32_t(i), bins.tilesX, cb.pairs, cb.cover.data(), triangles.nearest[i], greater, &cb.culled);
-  } else {
-    for (size_t i = 0; i < n; ++i) binTriangle(tris[i], uint32_t(i), bins.tilesX, cb.pairs);
   }
+  if (cull)
+    for (size_t i = 0; i < n; ++i)
+      binTriangle<true>(tris[i], uint32_t(i), bins.tilesX, cb.pairs, cb.cover.data(), triangles.nearest[i], greater,
+                        &cb.culled);
+  else
+    for (size_t i = 0; i < n; ++i) binTriangle<false>(tris[i], uint32_t(i), bins.tilesX, cb.pairs);
   // Counting sort by tile, stable: each tile's triangles stay in submission order.
   cb.start.assign(tiles + 1, 0);
   for (uint64_t p : cb.pairs) ++cb.start[(p >> 32) + 1];
