@@ -70,6 +70,39 @@ namespace {
 // Along a row of tiles that corner moves monotonically, so each edge keeps an interval of the
 // row's tiles and so do all three: the row's ends are tested until a tile passes, the tiles
 // between them are the triangle's without a test.
+// The tiles [first, last] of [lo, hi] (one row) where every edge passes `passes(edge, tx)`, a
+// test at one corner of the tile that moves monotonically along the row, so that each edge's
+// test is monotone in tx: non-decreasing when the edge function grows with x (dy < 0),
+// non-increasing when it falls (dy > 0), constant when dy == 0. A binary search per edge; the
+// interval is empty (first > last) when no tile passes.
+template <class Passes>
+HWY_INLINE std::pair<int, int> passingTiles(const Edge (&e)[3], int lo, int hi, Passes&& passes) {
+  int first = lo, last = hi;
+  for (const Edge& edge : e) {
+    if (first > last) break;
+    if (edge.dy < 0) {  // the first passing tile
+      int a = first, b = last + 1;
+      while (a < b) {
+        const int m = (a + b) / 2;
+        if (passes(edge, m)) b = m;
+        else a = m + 1;
+      }
+      first = a;
+    } else if (edge.dy > 0) {  // the last passing tile
+      int a = first - 1, b = last;
+      while (a < b) {
+        const int m = (a + b + 1) / 2;
+        if (passes(edge, m)) a = m;
+        else b = m - 1;
+      }
+      last = a;
+    } else if (!passes(edge, first)) {
+      last = first - 1;
+    }
+  }
+  return {first, last};
+}
+
 // With kCull (binChunk's cull), tiles whose covering bound in `cover` is strictly nearer than
 // `nearest` (in the direction `greater`) are left out and counted in `culled`.
 template <bool kCull>
@@ -92,16 +125,13 @@ HWY_INLINE void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, 
   const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
   for (int ty = ty0; ty <= ty1; ++ty) {
     const int y0 = std::max<int>(ty * kTileSize, t.minY), y1 = std::min<int>(ty * kTileSize + kTileSize - 1, t.maxY);
-    auto inside = [&](int tx) {  // no edge has all of the tile's part of the box outside
-      const int x0 = std::max<int>(tx * kTileSize, t.minX), x1 = std::min<int>(tx * kTileSize + kTileSize - 1, t.maxX);
-      bool outside = false;
-      for (const Edge& edge : e)  // E grows with x when -dy > 0, with y when dx > 0
-        outside |= edge.at(centerFixed(edge.dy < 0 ? x1 : x0), centerFixed(edge.dx > 0 ? y1 : y0)) < edge.bias;
-      return !outside;
+    // The edge is not wholly outside the tile's part of the box: E at the corner where it is
+    // largest (E grows with x when -dy > 0, with y when dx > 0).
+    auto passes = [&](const Edge& edge, int tx) {
+      const int x = edge.dy < 0 ? std::min<int>(tx * kTileSize + kTileSize - 1, t.maxX) : std::max<int>(tx * kTileSize, t.minX);
+      return edge.at(centerFixed(x), centerFixed(edge.dx > 0 ? y1 : y0)) >= edge.bias;
     };
-    int first = tx0, last = tx1;
-    while (first <= last && !inside(first)) ++first;
-    while (last > first && !inside(last)) --last;
+    const auto [first, last] = passingTiles(e, tx0, tx1, passes);
     const uint64_t rowKey = uint64_t(ty * tilesX) << 32 | index;
     for (int tx = first; tx <= last; ++tx)
       if (!hidden(ty * tilesX + tx)) pairs.push_back(rowKey + (uint64_t(tx) << 32));
@@ -126,17 +156,15 @@ bool coverBounds(const std::vector<SetupTriangle>& tris, const DepthSetup& depth
     for (int ty = (t.minY + kTileSize - 1) / kTileSize; ty * kTileSize <= t.maxY; ++ty) {
       const int y0 = ty * kTileSize, y1 = std::min(y0 + kTileSize, height) - 1;
       if (y1 > t.maxY) break;
-      auto covered = [&](int tx) {  // every pixel centre of the tile's part of the image is inside
-        const int x0 = tx * kTileSize, x1 = std::min(x0 + kTileSize, width) - 1;
-        if (x0 < t.minX || x1 > t.maxX) return false;
-        bool inside = true;
-        for (const Edge& edge : e)  // E grows with x when -dy > 0, with y when dx > 0
-          inside &= edge.at(centerFixed(edge.dy < 0 ? x0 : x1), centerFixed(edge.dx > 0 ? y0 : y1)) >= edge.bias;
-        return inside;
+      // The tiles of the row inside the box, whose every pixel centre in the image is inside
+      // the edge: E at the corner where it is smallest.
+      auto passes = [&](const Edge& edge, int tx) {
+        const int x = edge.dy < 0 ? tx * kTileSize : std::min(tx * kTileSize + kTileSize, width) - 1;
+        return edge.at(centerFixed(x), centerFixed(edge.dx > 0 ? y0 : y1)) >= edge.bias;
       };
-      int first = (t.minX + kTileSize - 1) / kTileSize, last = t.maxX / kTileSize;
-      while (first <= last && !covered(first)) ++first;
-      while (last > first && !covered(last)) --last;
+      int lastInBox = t.maxX / kTileSize;
+      if (std::min(lastInBox * kTileSize + kTileSize, width) - 1 > t.maxX) --lastInBox;
+      const auto [first, last] = passingTiles(e, (t.minX + kTileSize - 1) / kTileSize, lastInBox, passes);
       if (first > last) continue;
       if (!farKnown) {
         double px[3], py[3];
