@@ -29,6 +29,8 @@ struct OcclusionOptions {
   int threads = 0;          // 0: all cores
 };
 
+/// Queries (rectVisible, boxVisible, storedAt, depthImage) only read the buffer: several threads
+/// may query it at once, as long as no render() runs meanwhile.
 class OcclusionBuffer {
  public:
   OcclusionBuffer();
