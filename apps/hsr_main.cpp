@@ -378,6 +378,17 @@ struct BenchFlags {
   bool json = false, occlusion = false;
 };
 
+// The CPU's model name (Linux /proc/cpuinfo; "unknown" elsewhere), for benchmark records.
+std::string cpuModel() {
+  std::ifstream in("/proc/cpuinfo");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("model name", 0) == 0) {
+      const size_t start = line.find_first_not_of(' ', line.find(':') + 1);
+      if (line.find(':') != std::string::npos && start != std::string::npos) return line.substr(start);
+    }
+  return "unknown";
+}
+
 int runBench(const BenchFlags& f) {
   Job job = f.view.prepare();
   std::vector<double> frameMs;
@@ -415,6 +426,8 @@ int runBench(const BenchFlags& f) {
   out["scene"] = job.sceneName;
   out["size"] = fmt::format("{}x{}", frame.width, frame.height);
   out["threads"] = threads;
+  out["kernel_isa"] = hsr::kernelInstructionSet();
+  out["cpu"] = cpuModel();
   out["frames"] = n;
   out["warmup"] = f.warmup;
   out["median_ms"] = median;

@@ -176,6 +176,24 @@ TEST_F(CommandLine, BenchJsonHasTimesAndStatistics) {
   EXPECT_EQ(bench["scene"], "builtin:cubes");
   EXPECT_EQ(bench["width"], 64);
   EXPECT_TRUE(bench.contains("covered_pixels"));
+  EXPECT_FALSE(bench["kernel_isa"].get<std::string>().empty());
+  EXPECT_FALSE(bench["cpu"].get<std::string>().empty());
+}
+
+// --occlusion times the occlusion buffer: its statistics, and the depth-only frame's coverage.
+TEST_F(CommandLine, BenchOcclusionTimesTheOcclusionBuffer) {
+  Result r = hsr("bench builtin:city --frames 2 --json --size 160x90 --occlusion");
+  ASSERT_EQ(r.status, 0) << r;
+  nlohmann::json bench = nlohmann::json::parse(r.out);
+  EXPECT_EQ(bench["algorithm"], "occlusion");
+  Result d = hsr("bench builtin:city --frames 1 --json --size 160x90 --depth-only");
+  ASSERT_EQ(d.status, 0) << d;
+  nlohmann::json depth = nlohmann::json::parse(d.out);
+  EXPECT_EQ(bench["covered_pixels"], depth["covered_pixels"]);
+  EXPECT_GT(bench["covered_pixels"].get<int>(), 1000);
+  Result bad = hsr("bench builtin:city --frames 1 --occlusion --raster halfspace");
+  EXPECT_EQ(bad.status, 2) << bad;
+  EXPECT_NE(bad.err.find("--occlusion"), std::string::npos) << bad;
 }
 
 TEST_F(CommandLine, InfoDescribesScene) {

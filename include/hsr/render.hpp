@@ -62,6 +62,10 @@ struct AlgorithmInfo {
 const std::vector<AlgorithmInfo>& algorithms();
 const AlgorithmInfo* findAlgorithm(const std::string& name);
 
+/// The instruction set the tiled rasterizer's SIMD kernel runs with on this machine, chosen at
+/// run time (e.g. "AVX3" = AVX-512, "AVX2", "SSE4", "EMU128"): for benchmark records.
+const char* kernelInstructionSet();
+
 /// Result of comparing a frame with the exact reference.
 struct VerifyResult {
   uint64_t wrong_pixels = 0;      // face id differs and the difference is not explained below

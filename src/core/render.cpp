@@ -6,6 +6,7 @@
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "frontend/frontend.hpp"
+#include "raster/tiled.hpp"
 
 namespace hsr {
 
@@ -30,6 +31,8 @@ void algo::checkImage(const Camera& camera, DepthFormat format) {
   if (format.mapping == DepthMapping::Inv && !(camera.near > 0))
     throw InputError("--depth-format: the inv mapping needs near > 0");
 }
+
+const char* kernelInstructionSet() { return tiled::kernelTarget(); }
 
 Frame render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
   Frame frame;
