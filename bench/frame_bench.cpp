@@ -1,5 +1,6 @@
 // Micro benchmarks of the parts of a z-buffer frame at 1920x1080: the front end (set-up), the
-// binning, the tile pass per depth format, and whole frames tiled vs the scalar reference.
+// binning, the tile pass per depth format, whole frames tiled vs the scalar reference, and the
+// occlusion buffer's box queries.
 // Google Benchmark; the context records the kernel's instruction set, tile size and threads.
 // Run: build/bench/hsr_bench --benchmark_filter=Frame  (whole frames also via `hsr bench`).
 #include <benchmark/benchmark.h>
@@ -129,6 +130,35 @@ BENCHMARK(BM_Frame)
     ->ArgsProduct({{1, 2, 4}, {1}, {1}, {0}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// Occlusion queries: the scene range(0) rendered once into an OcclusionBuffer (2 threads), then
+// a 40 x 40 grid of boxes over its ground (each 1/100 of the scene's extent, 2% of its height)
+// tested with boxVisible; time per batch of 1600 queries, and how many may show.
+void BM_OcclusionBoxes(benchmark::State& state) {
+  const Prepared& p = prepared(kScenes[state.range(0)]);
+  OcclusionBuffer buffer;
+  buffer.render(p.scene, p.camera, {DepthFormat{}, Cull::None, 2});
+  const Bounds3 b = p.scene.bounds();
+  const dvec3 extent = b.hi - b.lo;
+  std::vector<Bounds3> boxes;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) {
+      Bounds3 box;
+      box.add(b.lo + dvec3((i + 0.25) / 40 * extent.x, 0.0, (j + 0.25) / 40 * extent.z));
+      box.add(b.lo + dvec3((i + 0.75) / 40 * extent.x, 0.02 * extent.y, (j + 0.75) / 40 * extent.z));
+      boxes.push_back(box);
+    }
+  int visible = 0;
+  for (auto _ : state) {
+    visible = 0;
+    for (const Bounds3& box : boxes) visible += buffer.boxVisible(box);
+    benchmark::DoNotOptimize(visible);
+  }
+  state.counters["boxes"] = double(boxes.size());
+  state.counters["visible"] = double(visible);
+  state.SetLabel(kScenes[state.range(0)]);
+}
+BENCHMARK(BM_OcclusionBoxes)->Arg(1)->Arg(0)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace hsr

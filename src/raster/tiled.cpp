@@ -64,12 +64,6 @@ void RasterCounters::add(const RasterCounters& o) {
 
 namespace {
 
-// Appends (tile << 32 | index) for each tile triangle `index` may cover: the tiles its box
-// overlaps, less those that one edge excludes (all four corner pixel centres of the box's part
-// outside: the edge function is linear, so it is enough that the corner where it is largest is).
-// Along a row of tiles that corner moves monotonically, so each edge keeps an interval of the
-// row's tiles and so do all three: the row's ends are tested until a tile passes, the tiles
-// between them are the triangle's without a test.
 // The tiles [first, last] of [lo, hi] (one row) where every edge passes `passes(edge, tx)`, a
 // test at one corner of the tile that moves monotonically along the row, so that each edge's
 // test is monotone in tx: non-decreasing when the edge function grows with x (dy < 0),
@@ -103,8 +97,12 @@ HWY_INLINE std::pair<int, int> passingTiles(const Edge (&e)[3], int lo, int hi, 
   return {first, last};
 }
 
-// With kCull (binChunk's cull), tiles whose covering bound in `cover` is strictly nearer than
-// `nearest` (in the direction `greater`) are left out and counted in `culled`.
+// Appends (tile << 32 | index) for each tile triangle `index` may cover: the tiles its box
+// overlaps, less those that one edge excludes (all four corner pixel centres of the box's part
+// outside: the edge function is linear, so it is enough that the corner where it is largest is).
+// Along a row of tiles that corner moves monotonically, so the row's tiles are found by
+// passingTiles. With kCull (binChunk's cull), tiles whose covering bound in `cover` is strictly
+// nearer than `nearest` (in the direction `greater`) are left out and counted in `culled`.
 template <bool kCull>
 HWY_INLINE void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector<uint64_t>& pairs,
                             const double* cover = nullptr, double nearest = 0, bool greater = false,
@@ -302,22 +300,39 @@ uint64_t resolveTile(const Bins& bins, int tile, const DepthSetup& depth, FrameO
 
 namespace {
 
-template <DepthStorage S, DepthMapping M>
-double planeStored(const SetupTriangle& t, const DepthSetup& depth, int x, int y) {
-  const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, depth.near, depth.far, depth.orthographic);
+template <DepthMapping M>
+MappedPlanes planesOf(const SetupTriangle& t, const DepthSetup& depth) {
+  return mapPlanes<M>(t.depthNum, t.depthDen, depth.near, depth.far, depth.orthographic);
+}
+
+// The stored value of plane m at image pixel (x, y), as the kernel computes it.
+template <DepthStorage S>
+double planeStored(const MappedPlanes& m, int x, int y) {
   const double Y = double(y) + 0.5;
   return fragmentStored<S>(m, double(x) + 0.5, m.p.b * Y, m.q.b * Y);
 }
 
-// The stored value at tile-local (x, y) of a tile at image origin (x0, y0).
-template <DepthStorage S, DepthMapping M>
-double storedIn(const TileScratch& s, const DepthSetup& depth, int x0, int y0, int x, int y) {
+// Calls fn(stored value) for the tile-local pixels [x0, x1] x [y0, y1] of one 8x8 block (or of
+// any part of a tile in state Clear or Plane), until it returns true; returns whether it did. The
+// planes are mapped once, not per pixel.
+template <DepthStorage S, DepthMapping M, class Fn>
+bool anyStoredIn(const TileScratch& s, const DepthSetup& depth, int tx0, int ty0, int x0, int y0, int x1, int y1,
+                 Fn&& fn) {
   constexpr int kBlocksX = kTileSize / kBlockSize;
-  if (s.state == TileState::Clear) return double(quantizeDepth<S>(depth.format.clearValue()));
-  if (s.state == TileState::Plane) return planeStored<S, M>(*s.plane, depth, x0 + x, y0 + y);
-  const int b = (y / kBlockSize) * kBlocksX + x / kBlockSize;
-  if (s.blockKey[b]) return planeStored<S, M>(*s.blockTriangle[b], depth, x0 + x, y0 + y);
-  return s.depth[size_t(y) * kTileSize + size_t(x)];
+  const SetupTriangle* plane = s.state == TileState::Plane ? s.plane
+                               : s.state == TileState::Pixels && s.blockKey[(y0 / kBlockSize) * kBlocksX + x0 / kBlockSize]
+                                   ? s.blockTriangle[(y0 / kBlockSize) * kBlocksX + x0 / kBlockSize]
+                                   : nullptr;
+  const double clear = double(quantizeDepth<S>(depth.format.clearValue()));
+  const MappedPlanes m = plane ? planesOf<M>(*plane, depth) : MappedPlanes{};
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      const double v = plane ? planeStored<S>(m, tx0 + x, ty0 + y)
+                       : s.state == TileState::Clear ? clear
+                                                     : s.depth[size_t(y) * kTileSize + size_t(x)];
+      if (fn(v)) return true;
+    }
+  return false;
 }
 
 template <DepthStorage S, DepthMapping M>
@@ -334,10 +349,8 @@ bool anyFartherT(const TileScratch& s, const DepthSetup& depth, int tx0, int ty0
   if (!storedNearer<M>(q, far)) return false;
   if (storedNearer<M>(q, s.tileNear)) return true;
   auto anyPixel = [&](int px0, int py0, int px1, int py1) {
-    for (int y = py0; y <= py1; ++y)
-      for (int x = px0; x <= px1; ++x)
-        if (storedNearer<M>(q, storedIn<S, M>(s, depth, tx0, ty0, x, y))) return true;
-    return false;
+    return anyStoredIn<S, M>(s, depth, tx0, ty0, px0, py0, px1, py1,
+                             [&](double v) { return storedNearer<M>(q, v); });
   };
   if (s.state == TileState::Plane) return anyPixel(x0, y0, x1, y1);
   for (int by = y0 / kBlockSize; by <= y1 / kBlockSize; ++by)
@@ -357,7 +370,11 @@ bool anyFartherT(const TileScratch& s, const DepthSetup& depth, int tx0, int ty0
 double storedAt(const Bins& bins, int tile, const DepthSetup& depth, const TileScratch& scratch, int x, int y) {
   double v = 0;
   visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() {
-    v = storedIn<S, M>(scratch, depth, (tile % bins.tilesX) * kTileSize, (tile / bins.tilesX) * kTileSize, x, y);
+    anyStoredIn<S, M>(scratch, depth, (tile % bins.tilesX) * kTileSize, (tile / bins.tilesX) * kTileSize, x, y, x, y,
+                      [&](double stored) {
+                        v = stored;
+                        return true;
+                      });
   });
   return v;
 }
