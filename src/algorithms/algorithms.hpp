@@ -10,6 +10,10 @@ namespace hsr::algo {
 void zbuffer(const Scene&, const Camera&, const RenderOptions&, Frame&);  // zbuffer.cpp
 void raycast(const Scene&, const Camera&, const RenderOptions&, Frame&);  // raycast.cpp
 
+/// Statistics of a frame before it is drawn: image size, faces and triangles of the scene
+/// (render.cpp; render() starts every frame's statistics so, as does the occlusion buffer).
+Stats frameStats(const Scene& scene, const Camera& camera);
+
 /// Throws InputError unless the camera's image size is in 1..kMaxImageSize and the depth format
 /// suits the camera (render.cpp; also checked by the occlusion buffer).
 void checkImage(const Camera& camera, DepthFormat format);

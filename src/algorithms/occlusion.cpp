@@ -90,7 +90,7 @@ const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, c
   im.depth = DepthSetup{opt.depthFormat, camera.near, camera.far, camera.orthographic};
   algo::setUpAndBin(scene, camera, opt, im.depth, im.state);
   Stats& st = im.stats;
-  st = Stats{};
+  st = algo::frameStats(scene, camera);
   st.addTime("frontend", timer.lap());
 
   const tiled::Bins& bins = im.state.bins;
@@ -111,10 +111,6 @@ const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, c
   st.addTime("raster", timer.lap());
 
   st.algorithm = "occlusion";
-  st.width = camera.width;
-  st.height = camera.height;
-  st.faces = scene.faceCount();
-  st.triangles = scene.triangles.size();
   st.depth_format = opt.depthFormat.name();
   algo::tiledStats(st, im.state.fe, &bins, counters);
   st.memory_bytes = im.state.memoryBytes() + im.tileCapacity * sizeof(tiled::TileScratch) + im.state.fe.memoryBytes();

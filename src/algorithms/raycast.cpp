@@ -45,11 +45,7 @@ void raycast(const Scene& scene, const Camera& camera, const RenderOptions& opti
   });
   st.addTime("trace", timer.lap());
 
-  st.algorithm = "raycast";
-  st.width = camera.width;
-  st.height = camera.height;
-  st.faces = scene.faceCount();
-  st.triangles = scene.triangles.size();
+  st.algorithm = "raycast";  // (image size, faces and triangles: render() set them)
   st.triangles_degenerate = bvh.degenerateTriangles();
   st.depth_tests = st.depth_writes = st.covered_pixels = 0;
   for (const RowCounters& row : rows) {

@@ -25,6 +25,15 @@ const AlgorithmInfo* findAlgorithm(const std::string& name) {
   return nullptr;
 }
 
+Stats algo::frameStats(const Scene& scene, const Camera& camera) {
+  Stats st;
+  st.width = camera.width;
+  st.height = camera.height;
+  st.faces = scene.faceCount();
+  st.triangles = scene.triangles.size();
+  return st;
+}
+
 void algo::checkImage(const Camera& camera, DepthFormat format) {
   if (camera.width <= 0 || camera.height <= 0 || camera.width > kMaxImageSize || camera.height > kMaxImageSize)
     throw InputError("--size: width and height must be in 1.." + std::to_string(kMaxImageSize));
@@ -53,14 +62,10 @@ void render(const Scene& scene, const Camera& camera, const RenderOptions& optio
     throw InputError("--verify: compares face ids, which --depth-only does not keep");
 
   Timer total;
-  frame.stats = Stats{};
+  frame.stats = algo::frameStats(scene, camera);
   // Sized, not cleared: every algorithm writes every pixel (a pass over 33 MB less at 1080p).
   frame.allocate(camera.width, camera.height, options.outputs != FrameOutputs::DepthOnly,
                  options.outputs == FrameOutputs::All);
-  frame.stats.width = camera.width;
-  frame.stats.height = camera.height;
-  frame.stats.faces = scene.faceCount();
-  frame.stats.triangles = scene.triangles.size();
   algorithm->run(scene, camera, options, frame);
   frame.stats.addTime("total", total.ms());
 
