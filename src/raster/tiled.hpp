@@ -14,8 +14,10 @@
 // Uniform states ("lossless z-buffer compression", document 002): a tile starts cleared without
 // touching its buffers, and a triangle covering all of it in front of everything stored there
 // makes it that triangle's plane in O(1) (TileState); likewise an 8x8 block for a triangle
-// parallel to the image plane (TileScratch::blockKey). Values are computed from the plane, bit
-// for bit as the kernel would have stored them, when a triangle covers part of it or at resolve.
+// parallel to the image plane (TileScratch::blockKey), and each block of a plane tile that a
+// triangle then covers only in part: the tile's blocks keep the plane, with bounds from its
+// corners, until something lands on them. Values are computed from the plane, bit for bit as
+// the kernel would have stored them, when a triangle covers part of a block or at resolve.
 //
 // Early rejection (the base for a hierarchical z-buffer): each tile and each 8x8 block keeps
 // conservative farthest and nearest stored values; a triangle whose conservative nearest value
@@ -122,7 +124,8 @@ struct alignas(64) TileScratch {
   alignas(64) double blockNear[kBlocksPerTile];  // ... nearer (conservative bounds, both)
   // State Pixels, per block: a triangle that won every pixel of the block at once (its key, 0 =
   // none): the block's values are that triangle's plane and its pixel buffers are stale — the
-  // same uniform state as a tile's Plane, one level down.
+  // same uniform state as a tile's Plane, one level down (also what a Plane tile's blocks
+  // inside the image become when the tile turns to Pixels).
   alignas(64) uint64_t blockKey[kBlocksPerTile];
   const SetupTriangle* blockTriangle[kBlocksPerTile];
   double tileFar;   // no stored value is farther (conservative; stale while tileFarStale)
