@@ -382,10 +382,9 @@ struct BenchFlags {
 std::string cpuModel() {
   std::ifstream in("/proc/cpuinfo");
   for (std::string line; std::getline(in, line);)
-    if (line.rfind("model name", 0) == 0) {
-      const size_t start = line.find_first_not_of(' ', line.find(':') + 1);
-      if (line.find(':') != std::string::npos && start != std::string::npos) return line.substr(start);
-    }
+    if (const size_t colon = line.find(':'); line.rfind("model name", 0) == 0 && colon != std::string::npos)
+      if (const size_t start = line.find_first_not_of(' ', colon + 1); start != std::string::npos)
+        return line.substr(start);
   return "unknown";
 }
 
@@ -406,9 +405,7 @@ int runBench(const BenchFlags& f) {
     double ms = millisecondsSince(start);
     if (i >= f.warmup) frameMs.push_back(ms);
   }
-  if (f.occlusion) {
-    occlusion.depthImage(frame);  // its statistics, with covered_pixels (not timed)
-  }
+  if (f.occlusion) occlusion.depthImage(frame);  // its statistics, with covered_pixels (not timed)
   std::vector<double> sorted = frameMs;
   std::sort(sorted.begin(), sorted.end());
   size_t n = sorted.size();

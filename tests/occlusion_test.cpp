@@ -51,7 +51,7 @@ long firstDifference(const std::vector<float>& a, const std::vector<float>& b) {
 
 // "stored value a is nearer than b" in the format's direction.
 bool nearer(DepthFormat f, double a, double b) {
-  return f.mapping == DepthMapping::Reversed || f.mapping == DepthMapping::Inv ? a > b : a < b;
+  return f.greaterWins() ? a > b : a < b;
 }
 
 double storedOfEye(DepthFormat f, const Camera& cam, double eye) {

@@ -206,8 +206,7 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
   cb.pairs.clear();
   cb.culled = 0;
   bool cull = false;
-  const bool greater =
-      cullFor && (cullFor->format.mapping == DepthMapping::Reversed || cullFor->format.mapping == DepthMapping::Inv);
+  const bool greater = cullFor && cullFor->format.greaterWins();
   static_assert(kLargeBoxPixels == kTileSize, "the front end counts the triangles that can cover a tile");
   if (cullFor && (triangles.counters.large > 0 || bins.width < kTileSize || bins.height < kTileSize)) {
     cb.cover.assign(tiles, greater ? -std::numeric_limits<double>::infinity() : std::numeric_limits<double>::infinity());
