@@ -443,6 +443,36 @@ TEST(Tiled, TrianglesBehindATriangleCoveringTheTileAreNotBinned) {
 // submitted first. Two identical triangles (equal depth everywhere): the second is given a
 // nearer (still valid) bound, so its tile visits it first; the first must still win every pixel,
 // as in submission order.
+// A tile held pixel by pixel is resolved from the cells prepareResolve fills; resolving it
+// without that step is a programming error, reported, not a wrong image.
+TEST(Tiled, ResolvingIdsNeedsPrepareResolve) {
+  const Scene scene = loadScene("builtin:random?n=200");
+  const Camera cam = resolveCamera(*scene.camera, 128, 96, scene.bounds());
+  const DepthSetup depth{DepthFormat{}, cam.near, cam.far, cam.orthographic};
+  FrontEndOutput fe;
+  runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
+  tiled::Bins bins;
+  tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
+  for (size_t c = 0; c < fe.chunkCount; ++c) tiled::binChunk(bins, c, fe.chunks[c]);
+  auto scratch = std::make_unique<tiled::TileScratch>();
+  tiled::TileOrder lists;
+  tiled::RasterCounters counters;
+  const TriangleShader shade(scene, cam, Shading::Flat);
+  Frame frame;
+  frame.allocate(cam.width, cam.height);
+  int pixelTiles = 0;
+  for (int tile = 0; tile < bins.tileCount(); ++tile) {
+    tiled::rasterizeTile(bins, tile, depth, true, *scratch, lists, counters);
+    if (scratch->state != tiled::TileState::Pixels) continue;
+    ++pixelTiles;
+    EXPECT_THROW(tiled::resolveTile(bins, tile, depth, FrameOutputs::All, &shade, Rgba8{}, *scratch, frame),
+                 std::logic_error);
+    tiled::prepareResolve(bins, tile, depth, FrameOutputs::All, &shade, Rgba8{}, *scratch);
+    EXPECT_GT(tiled::resolveTile(bins, tile, depth, FrameOutputs::All, &shade, Rgba8{}, *scratch, frame), 0u);
+  }
+  EXPECT_GT(pixelTiles, 0);
+}
+
 TEST(Tiled, EqualDepthGoesToTheTriangleSubmittedFirstWhateverTheVisitOrder) {
   Scene scene;
   scene.source = "test";

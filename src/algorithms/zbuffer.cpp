@@ -120,9 +120,11 @@ void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const Triangle
     for (size_t seg; (seg = next.fetch_add(1, std::memory_order_relaxed)) < segments;) {
       const int ty = int(seg) / segmentsX, tx0 = (int(seg) % segmentsX) * kSegmentTiles;
       const int count = std::min(kSegmentTiles, bins.tilesX - tx0), first = ty * bins.tilesX + tx0;
-      for (int i = 0; i < count; ++i)
+      for (int i = 0; i < count; ++i) {
         tiled::rasterizeTile(bins, first + i, depth, ids, scratch[i], state.orders[worker],
                              state.counters[size_t(first + i)]);
+        if (ids) tiled::prepareResolve(bins, first + i, depth, opt.outputs, &shade, opt.background, scratch[i]);
+      }
       for (int row = 0; row < tiled::kTileSize; row += kResolveBand)
         for (int i = 0; i < count; ++i)
           state.covered[size_t(first + i)] += tiled::resolveTile(bins, first + i, depth, opt.outputs, &shade,

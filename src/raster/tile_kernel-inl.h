@@ -30,6 +30,7 @@
 #include <algorithm>
 #include <cstring>
 #include <limits>
+#include <stdexcept>
 
 #include "core/depth_map.hpp"
 #include "raster/fragment_depth.hpp"
@@ -254,6 +255,7 @@ void RasterizeTileT(const TileJob& job) {
   // The tile starts cleared, as one uniform state: nothing is written to its buffers until a
   // triangle covers only part of it.
   s.state = TileState::Clear;
+  s.resolved = false;
   s.tileFar = tf.clear;
   s.tileNear = tf.clear;
   s.tileFarStale = false;
@@ -593,91 +595,173 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
   return covered;
 }
 
-// Ids (and colour): face id, triangle id and the eye depth of the winning triangle's planes at
-// the pixel centre, as the reference resolves it; the background where nothing was drawn
-// (every pixel of the tile is written). A row of lanes won by one triangle is done with vectors
-// (the same operations as SetupTriangle::eyeDepth), others pixel by pixel.
+// A pixel's two cells after prepareResolve (tiled.hpp): depth = (float eye depth, int32 face
+// id), triangle = (int32 triangle id, Rgba8 colour), the first of each pair in the low half.
+HWY_INLINE uint64_t PackCell(uint32_t low, uint32_t high) { return uint64_t(high) << 32 | low; }
+template <class T>
+HWY_INLINE uint32_t Bits32(T v) {
+  static_assert(sizeof(T) == 4);
+  uint32_t bits;
+  std::memcpy(&bits, &v, 4);
+  return bits;
+}
+
+// The colour of a set-up triangle for the frame (FrameOutputs::All), remembering the last one:
+// neighbouring pixels mostly share their triangle, and back faces are shaded here.
+struct ColorCache {
+  const TriangleShader* shader;
+  uint64_t lastKey = 0;
+  uint32_t lastColor = 0;
+  uint32_t operator()(uint64_t key, const SetupTriangle& t) {
+    if (key != lastKey) {
+      lastKey = key;
+      lastColor = Bits32(triangleColor(t, *shader));
+    }
+    return lastColor;
+  }
+};
+
+// prepareResolve (tiled.hpp) for a tile in state Pixels: every block held pixel by pixel (no
+// blockKey) turned in place into the frame's values — face id, triangle id and the eye depth of
+// the winning triangle's planes at the pixel centre, as the reference resolves it (the same
+// operations as SetupTriangle::eyeDepth; a row of lanes won by one triangle with vectors), or
+// the background where nothing was drawn.
 template <bool kColor>
-uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background, int rowBegin, int rowEnd,
-                     Frame& frame) {
+void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
+  constexpr int kBlocksX = kTileSize / kBlockSize;
   const D d;
   const DU du;
   const hn::Rebind<float, D> df;
-  const hn::Rebind<int32_t, D> di;
   const hn::Rebind<uint32_t, D> du32;
   const size_t N = hn::Lanes(d);
   const Bins& bins = *job.bins;
   const int x0 = (job.tile % bins.tilesX) * kTileSize, y0 = (job.tile / bins.tilesX) * kTileSize;
   const int w = std::min(kTileSize, bins.width - x0), h = std::min(kTileSize, bins.height - y0);
-  // Colour: set up with front faces; back faces (mostly hidden) are shaded here when they show.
-  uint64_t lastKey = 0;
-  Rgba8 lastColor{};
-  [[maybe_unused]] auto colorOf = [&](uint64_t key, const SetupTriangle& t) {
-    if (key != lastKey) {
-      lastKey = key;
-      lastColor = triangleColor(t, *job.shader);
+  ColorCache colorOf{job.shader};
+  const uint64_t emptyDepth = PackCell(Bits32(std::numeric_limits<float>::infinity()), Bits32(int32_t(-1)));
+  const uint64_t emptyTriangle = PackCell(Bits32(int32_t(-1)), kColor ? Bits32(background) : 0);
+  for (int b = 0; b < kBlocksPerTile; ++b) {
+    const int bx = (b % kBlocksX) * kBlockSize, by = (b / kBlocksX) * kBlockSize;
+    s.blockEmpty[b] = false;
+    if (s.blockKey[b] || bx >= w || by >= h) continue;
+    // One key in every cell (those outside the image hold 0): the block is that triangle's plane
+    // (every value is its fragment's, bit for bit) or empty, resolved from that alone.
+    const uint64_t only = s.triangle[size_t(by) * kTileSize + size_t(bx)];
+    auto same = hn::Set(du, 0);
+    for (int y = by; y < by + kBlockSize; ++y)
+      for (size_t k = 0; k < size_t(kBlockSize); k += N)
+        same = hn::Or(same, hn::Xor(hn::Load(du, s.triangle + size_t(y) * kTileSize + size_t(bx) + k), hn::Set(du, only)));
+    if (hn::AllTrue(du, hn::Eq(same, hn::Zero(du)))) {
+      if (only) {
+        s.blockKey[b] = only;
+        s.blockTriangle[b] = &bins.triangle(only);
+      } else {
+        s.blockEmpty[b] = true;
+      }
+      continue;
     }
-    return lastColor;
-  };
-  uint32_t backgroundBits;
-  std::memcpy(&backgroundBits, &background, sizeof backgroundBits);
+    for (int y = by; y < std::min(by + kBlockSize, h); ++y) {
+      const double Y = double(y0 + y) + 0.5;
+      for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+        const size_t at = size_t(y) * kTileSize + size_t(bx) + k;
+        uint64_t* keys = s.triangle + at;
+        uint64_t* cells = reinterpret_cast<uint64_t*>(s.depth + at);
+        const uint64_t first = keys[0];
+        if (first != 0 && hn::AllTrue(du, hn::Eq(hn::Load(du, keys), hn::Set(du, first)))) {
+          const SetupTriangle& t = bins.triangle(first);
+          const V X = hn::Iota(d, double(x0 + bx + int(k)) + 0.5);
+          const V num = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthNum.a), X), hn::Set(d, t.depthNum.b * Y)),
+                                hn::Set(d, t.depthNum.c));
+          const V den = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthDen.a), X), hn::Set(d, t.depthDen.b * Y)),
+                                hn::Set(d, t.depthDen.c));
+          const auto eye = hn::BitCast(du32, hn::DemoteTo(df, hn::Div(num, den)));
+          hn::Store(hn::Or(hn::PromoteTo(du, eye), hn::Set(du, PackCell(0, Bits32(int32_t(t.face))))), du, cells);
+          const uint32_t color = kColor ? colorOf(first, t) : 0;
+          hn::Store(hn::Set(du, PackCell(Bits32(int32_t(t.triangle)), color)), du, keys);
+          continue;
+        }
+        for (size_t j = 0; j < N; ++j) {
+          const uint64_t key = keys[j];
+          if (!key) {
+            cells[j] = emptyDepth;
+            keys[j] = emptyTriangle;
+            continue;
+          }
+          const SetupTriangle& t = bins.triangle(key);
+          const float eye = float(t.eyeDepth(double(x0 + bx + int(k + j)) + 0.5, Y));
+          cells[j] = PackCell(Bits32(eye), Bits32(int32_t(t.face)));
+          keys[j] = PackCell(Bits32(int32_t(t.triangle)), kColor ? colorOf(key, t) : 0);
+        }
+      }
+    }
+  }
+  s.resolved = true;
+}
+
+// Ids (and colour): writes the tile's rows [rowBegin, rowEnd) into the frame. Blocks held pixel
+// by pixel are copied from the cells prepareResolve filled; uniform ones (a cleared tile, a
+// plane tile or block) are computed from their triangle, a row of lanes at a time.
+template <bool kColor>
+uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background, int rowBegin, int rowEnd,
+                     Frame& frame) {
+  const D d;
+  const hn::Rebind<float, D> df;
+  const hn::Rebind<uint32_t, D> du32;
+  const size_t N = hn::Lanes(d);
+  const Bins& bins = *job.bins;
+  const int x0 = (job.tile % bins.tilesX) * kTileSize, y0 = (job.tile / bins.tilesX) * kTileSize;
+  const int w = std::min(kTileSize, bins.width - x0), h = std::min(kTileSize, bins.height - y0);
+  if (s.state == TileState::Pixels && !s.resolved)
+    throw std::logic_error("resolveTile: a tile held pixel by pixel was not through prepareResolve");
+  ColorCache colorOf{job.shader};
+  const uint32_t backgroundBits = Bits32(background);
   const uint64_t tileKey = s.state == TileState::Plane ? s.planeKey : 0;
+  const auto noId = hn::Set(du32, Bits32(int32_t(-1)));
   uint64_t covered = 0;
   for (int y = rowBegin; y < std::min(rowEnd, h); ++y) {
     const double Y = double(y0 + y) + 0.5;
     for (size_t k = 0; k < size_t(w); k += N) {
-      const uint64_t* ids = s.triangle + size_t(y) * kTileSize + k;
-      const uint64_t blockKey =
-          s.state == TileState::Pixels ? s.blockKey[(y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize] : 0;
-      const bool uniform = s.state != TileState::Pixels || blockKey != 0;
-      const uint64_t uniformKey = s.state == TileState::Pixels ? blockKey : tileKey;
-      const auto idV = uniform ? hn::Set(du, uniformKey) : hn::Load(du, ids);
-      const uint64_t first = uniform ? uniformKey : ids[0];
       const size_t count = std::min(N, size_t(w) - k);
       const size_t at = frame.index(x0 + int(k), y0 + y);
-      if (hn::AllTrue(du, hn::Eq(idV, hn::Zero(du)))) {
-        StorePartial(hn::Set(df, std::numeric_limits<float>::infinity()), df, count, frame.depth.data() + at);
-        StorePartial(hn::Set(di, -1), di, count, frame.faceId.data() + at);
-        StorePartial(hn::Set(di, -1), di, count, frame.triangleId.data() + at);
-        if constexpr (kColor)
-          StorePartial(hn::Set(du32, backgroundBits), du32, count, reinterpret_cast<uint32_t*>(frame.color.data() + at));
+      uint32_t* depthOut = reinterpret_cast<uint32_t*>(frame.depth.data() + at);
+      uint32_t* faceOut = reinterpret_cast<uint32_t*>(frame.faceId.data() + at);
+      uint32_t* triangleOut = reinterpret_cast<uint32_t*>(frame.triangleId.data() + at);
+      uint32_t* colorOut = reinterpret_cast<uint32_t*>(frame.color.data() + at);
+      const uint64_t blockKey =
+          s.state == TileState::Pixels ? s.blockKey[(y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize] : 0;
+      const bool empty =
+          s.state == TileState::Pixels && s.blockEmpty[(y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize];
+      if (s.state == TileState::Pixels && !blockKey && !empty) {  // the cells prepareResolve filled
+        hn::Vec<decltype(du32)> eye, face, triangle, color;
+        hn::LoadInterleaved2(du32, reinterpret_cast<const uint32_t*>(s.depth + size_t(y) * kTileSize + k), eye, face);
+        hn::LoadInterleaved2(du32, reinterpret_cast<const uint32_t*>(s.triangle + size_t(y) * kTileSize + k), triangle,
+                             color);
+        StorePartial(eye, du32, count, depthOut);
+        StorePartial(face, du32, count, faceOut);
+        StorePartial(triangle, du32, count, triangleOut);
+        if constexpr (kColor) StorePartial(color, du32, count, colorOut);
+        covered += hn::CountTrue(du32, hn::AndNot(hn::Eq(triangle, noId), hn::FirstN(du32, count)));
         continue;
       }
-      if (count == N && first != 0 && hn::AllTrue(du, hn::Eq(idV, hn::Set(du, first)))) {
-        const SetupTriangle& t = bins.triangle(first);
-        const V X = hn::Iota(d, double(x0 + int(k)) + 0.5);
-        const V num = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthNum.a), X), hn::Set(d, t.depthNum.b * Y)),
-                              hn::Set(d, t.depthNum.c));
-        const V den = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthDen.a), X), hn::Set(d, t.depthDen.b * Y)),
-                              hn::Set(d, t.depthDen.c));
-        hn::StoreU(hn::DemoteTo(df, hn::Div(num, den)), df, frame.depth.data() + at);
-        hn::StoreU(hn::Set(di, int32_t(t.face)), di, frame.faceId.data() + at);
-        hn::StoreU(hn::Set(di, int32_t(t.triangle)), di, frame.triangleId.data() + at);
-        if constexpr (kColor) {
-          uint32_t rgba;
-          const Rgba8 color = colorOf(first, t);
-          std::memcpy(&rgba, &color, sizeof rgba);
-          hn::StoreU(hn::Set(du32, rgba), du32, reinterpret_cast<uint32_t*>(frame.color.data() + at));
-        }
-        covered += N;
+      const uint64_t key = s.state == TileState::Pixels ? blockKey : tileKey;  // (0 when empty)
+      if (!key) {
+        StorePartial(hn::Set(du32, Bits32(std::numeric_limits<float>::infinity())), du32, count, depthOut);
+        StorePartial(noId, du32, count, faceOut);
+        StorePartial(noId, du32, count, triangleOut);
+        if constexpr (kColor) StorePartial(hn::Set(du32, backgroundBits), du32, count, colorOut);
         continue;
       }
-      for (size_t j = 0; j < count; ++j) {
-        const uint64_t key = uniform ? uniformKey : ids[j];
-        if (!key) {
-          frame.faceId[at + j] = -1;
-          frame.triangleId[at + j] = -1;
-          frame.depth[at + j] = std::numeric_limits<float>::infinity();
-          if constexpr (kColor) frame.color[at + j] = background;
-          continue;
-        }
-        const SetupTriangle& t = bins.triangle(key);
-        frame.faceId[at + j] = int32_t(t.face);
-        frame.triangleId[at + j] = int32_t(t.triangle);
-        frame.depth[at + j] = float(t.eyeDepth(double(x0 + int(k + j)) + 0.5, Y));
-        if constexpr (kColor) frame.color[at + j] = colorOf(key, t);
-        ++covered;
-      }
+      const SetupTriangle& t = bins.triangle(key);
+      const V X = hn::Iota(d, double(x0 + int(k)) + 0.5);
+      const V num = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthNum.a), X), hn::Set(d, t.depthNum.b * Y)),
+                            hn::Set(d, t.depthNum.c));
+      const V den = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthDen.a), X), hn::Set(d, t.depthDen.b * Y)),
+                            hn::Set(d, t.depthDen.c));
+      StorePartial(hn::BitCast(du32, hn::DemoteTo(df, hn::Div(num, den))), du32, count, depthOut);
+      StorePartial(hn::Set(du32, Bits32(int32_t(t.face))), du32, count, faceOut);
+      StorePartial(hn::Set(du32, Bits32(int32_t(t.triangle))), du32, count, triangleOut);
+      if constexpr (kColor) StorePartial(hn::Set(du32, colorOf(key, t)), du32, count, colorOut);
+      covered += count;
     }
   }
   return covered;
@@ -692,6 +776,12 @@ uint64_t ResolveTile(const TileJob& job, const TileScratch& s, FrameOutputs outp
     covered = ResolveDepthT<S, M>(job, s, rowBegin, rowEnd, frame);
   });
   return covered;
+}
+
+void PrepareResolve(const TileJob& job, FrameOutputs outputs, Rgba8 background) {
+  if (job.scratch->state != TileState::Pixels) return;  // uniform: resolved from its triangle
+  if (outputs == FrameOutputs::All) PrepareResolveT<true>(job, *job.scratch, background);
+  else if (outputs == FrameOutputs::IdsAndDepth) PrepareResolveT<false>(job, *job.scratch, background);
 }
 
 // The exported entry: picks the compiled loop of the job's format and output.

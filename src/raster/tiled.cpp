@@ -27,6 +27,7 @@ namespace hsr::tiled {
 
 HWY_EXPORT(RasterizeTile);
 HWY_EXPORT(ResolveTile);
+HWY_EXPORT(PrepareResolve);
 HWY_EXPORT(KernelTarget);
 
 size_t Bins::entries(int tile) const {
@@ -288,6 +289,12 @@ void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids
                    TileOrder& order, RasterCounters& counters) {
   const TileJob job{&bins, tile, depth, ids, &scratch, &counters, nullptr, &order};
   HWY_DYNAMIC_DISPATCH(RasterizeTile)(job);
+}
+
+void prepareResolve(const Bins& bins, int tile, const DepthSetup& depth, FrameOutputs outputs,
+                    const TriangleShader* shader, Rgba8 background, TileScratch& scratch) {
+  const TileJob job{&bins, tile, depth, true, &scratch, nullptr, shader, nullptr};
+  HWY_DYNAMIC_DISPATCH(PrepareResolve)(job, outputs, background);
 }
 
 uint64_t resolveTile(const Bins& bins, int tile, const DepthSetup& depth, FrameOutputs outputs,

@@ -131,6 +131,11 @@ struct alignas(64) TileScratch {
   double tileFar;   // no stored value is farther (conservative; stale while tileFarStale)
   double tileNear;  // no stored value is nearer (conservative)
   bool tileFarStale;
+  // After prepareResolve(): nothing was drawn in the block (its buffers were left as they were).
+  bool blockEmpty[kBlocksPerTile];
+  // State Pixels after prepareResolve(): the buffers of the blocks without blockKey or
+  // blockEmpty hold the frame's values, not depth and keys (see prepareResolve).
+  bool resolved;
   TileState state;
   const SetupTriangle* plane;  // state Plane: the triangle, and its key
   uint64_t planeKey;
@@ -179,6 +184,20 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
 void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids, TileScratch& scratch,
                    TileOrder& order, RasterCounters& counters);
 
+/// Readies a tile that rasterizeTile(ids = true) left in `scratch` for resolveTile() with ids
+/// (FrameOutputs::All or IdsAndDepth), right after rasterizing, while the tile's set-up
+/// triangles are still in this core's cache. A block won wholly by one triangle gets it as its
+/// blockKey, one where nothing was drawn blockEmpty (both resolved a row of lanes at a time);
+/// in the other blocks held pixel by pixel, each pixel is turned, in place, into what the frame
+/// gets — depth[i] becomes (float eye depth, int32 face
+/// id), triangle[i] (int32 triangle id, Rgba8 colour) — so that the resolve, which writes the
+/// frame band by band across several tiles, copies instead of looking triangles up. (Looked up
+/// at resolve, the records had left the cache: 40% of the resolve's samples were that load on
+/// the million-triangle sphere.) Depth and keys are gone afterwards (TileScratch::resolved).
+/// `shader` and `background`: colour, for FrameOutputs::All only.
+void prepareResolve(const Bins& bins, int tile, const DepthSetup& depth, FrameOutputs outputs,
+                    const TriangleShader* shader, Rgba8 background, TileScratch& scratch);
+
 /// Writes every pixel of the tile of `scratch` into `frame` as `outputs` asks: ids, eye depth
 /// of the winning triangle's plane at the pixel centre (exactly as the reference resolves it),
 /// its colour (SetupTriangle::color, or from `shader` for back faces; needed for
@@ -188,7 +207,8 @@ void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids
 /// rowEnd) (tile-local): a caller resolving several tiles writes the frame band by band across
 /// them — row-major frame buffers written one 64x64 tile at a time are 3-6x slower to write
 /// (64 rows x 4 buffers of scattered 256-byte pieces defeat the hardware prefetchers and TLB),
-/// measured on this project's 2-core VM. Returns the number of covered pixels.
+/// measured on this project's 2-core VM. With ids, the tile must have been through
+/// prepareResolve() (std::logic_error otherwise). Returns the number of covered pixels.
 uint64_t resolveTile(const Bins& bins, int tile, const DepthSetup& depth, FrameOutputs outputs,
                      const TriangleShader* shader, Rgba8 background, const TileScratch& scratch, Frame& frame,
                      int rowBegin = 0, int rowEnd = kTileSize);
