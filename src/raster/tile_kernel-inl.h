@@ -162,6 +162,16 @@ HWY_INLINE void FillBlock(TileScratch& s, const TileFrame& f, int b, bool plane,
   const V farthestV = hn::Set(d, f.farthestPossible);
   const auto keyV = hn::Set(du, key), zeroKey = hn::Zero(du);
   const int bx = (b % kBlocksX) * kBlockSize, by = (b / kBlocksX) * kBlockSize;
+  if (!plane && bx + kBlockSize <= f.w && by + kBlockSize <= f.h) {  // one value, all in the image
+    for (int y = by; y < by + kBlockSize; ++y)
+      for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+        const size_t at = size_t(y) * kTileSize + size_t(bx) + k;
+        hn::Store(valueV, d, s.depth + at);
+        if constexpr (kIds) hn::Store(keyV, du, s.triangle + at);
+      }
+    farOut = nearOut = value;
+    return;
+  }
   V far = outside, near = farthestV;
   for (int y = by; y < by + kBlockSize; ++y)
     for (size_t k = 0; k < size_t(kBlockSize); k += N) {
@@ -280,9 +290,10 @@ void RasterizeTileT(const TileJob& job) {
     const SetupTriangle& t = *order[item].triangle;
     // The records are scattered over the chunks: fetch ahead those of triangles the tile's
     // bound does not reject already (nearest first, most hidden ones are rejected unread).
-    if (item + 2 < end && !Beaten<M, kIds>(order[item + 2].nearest, s.tileFar)) {
-      hwy::Prefetch(order[item + 2].triangle);
-      hwy::Prefetch(reinterpret_cast<const char*>(order[item + 2].triangle) + 64);
+    constexpr size_t kAhead = 12;
+    if (item + kAhead < end && !Beaten<M, kIds>(order[item + kAhead].nearest, s.tileFar)) {
+      hwy::Prefetch(order[item + kAhead].triangle);
+      hwy::Prefetch(reinterpret_cast<const char*>(order[item + kAhead].triangle) + 64);
     }
     const uint64_t key = order[item].key;
     // Early rejection: the triangle's nearest possible value is farther than the farthest
