@@ -215,6 +215,8 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
   size_t batched = 0;
   auto keep = [&](SetupTriangle& t, double nearest) {  // front faces shaded (see triangleColor)
     t.color = color && t.frontFacing ? shade(t.triangle) : Rgba8{};
+    if (out.triangles.size() + 48 < out.triangles.capacity())
+      __builtin_prefetch(out.triangles.data() + out.triangles.size() + 48, 1, 3);
     out.triangles.push_back(t);
     if (depth) out.nearest.push_back(nearest);
   };
