@@ -4,6 +4,9 @@
 #   - depth image: `--depth-only` render() calls (a depth frame written, eye depth per pixel);
 #   - occlusion buffer: `--occlusion`, hsr::OcclusionBuffer::render calls (depth kept in tiles,
 #     no image: what an occlusion culler pays per frame, and what Masked Occlusion Culling times);
+#   - the same with `--cull back`: MOC's RenderTriangles culls back faces unless told otherwise
+#     (its bfWinding parameter defaults to BACKFACE_CW), so this column is the like-for-like one
+#     (hsr draws both sides by default, as its conventions ask);
 # next to the MOC figures the issue quotes (approximate depth, 1 thread, measured elsewhere —
 # MOC is not packaged in Debian, so it is not run here).
 # Usage: scripts/bench-depth.sh [ROUNDS, default 5] [FRAMES, default 15]; THREADS (default 2),
@@ -21,23 +24,24 @@ echo "date: $(date -u '+%Y-%m-%d %H:%M UTC'); commit: $(git rev-parse --short HE
 echo "cpu: $(grep -m1 "model name" /proc/cpuinfo | cut -d: -f2- | sed "s/^ //"), $(nproc) cores"
 echo "size 1920x1080, $rounds alternating rounds of $frames frames (2 warm-up), --threads $threads, depth f32:reversed"
 echo
-echo "| scene | triangles | depth image ms | occlusion buffer ms | MOC ms (issue's figure, 1 thread) | target ms |"
-echo "|---|---:|---:|---:|---:|---:|"
+echo "| scene | triangles | depth image ms | occlusion buffer ms | occlusion buffer, back faces culled, ms | MOC ms (issue's figure, 1 thread, MOC's default back-face culling) | target ms |"
+echo "|---|---:|---:|---:|---:|---:|---:|"
 median_of() {  # hsr bench ... --json -> median_ms
   "$hsr" bench "$@" --size 1920x1080 --frames "$frames" --warmup 2 --threads "$threads" --json |
     python3 -c 'import json,sys; print(json.load(sys.stdin)["median_ms"])'
 }
 while read -r scene triangles moc target; do
-  image=(); occl=()
+  image=(); occl=(); back=()
   for _ in $(seq "$rounds"); do
     image+=("$(median_of "$scene" --depth-only)")
     occl+=("$(median_of "$scene" --occlusion)")
+    back+=("$(median_of "$scene" --occlusion --cull back)")
   done
-  python3 - "$scene" "$triangles" "$moc" "$target" "${image[*]}" "${occl[*]}" <<'PY'
+  python3 - "$scene" "$triangles" "$moc" "$target" "${image[*]}" "${occl[*]}" "${back[*]}" <<'PY'
 import statistics, sys
-scene, triangles, moc, target, image, occl = sys.argv[1:]
+scene, triangles, moc, target, image, occl, back = sys.argv[1:]
 med = lambda s: statistics.median(float(x) for x in s.split())
-print(f"| `{scene}` | {triangles} | {med(image):.2f} | {med(occl):.2f} | {moc} | {target} |")
+print(f"| `{scene}` | {triangles} | {med(image):.2f} | {med(occl):.2f} | {med(back):.2f} | {moc} | {target} |")
 PY
 done <<'SCENES'
 builtin:sphere 1003520 17.8 18

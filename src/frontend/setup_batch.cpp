@@ -257,10 +257,16 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     counters.large += hn::CountTrue(d, hn::And(survivors, hn::And(hn::Ge(bw, largeBox), hn::Ge(bh, largeBox))));
     const V nearestV = depth ? NearestStored(*depth, {na, nb, nc}, {da, db, dc}, px, py) : zero;
     HWY_ALIGN double lane[18][kSetupBatch];
-    int field = 0;
-    for (const V v : {X[0], X[1], X[2], Y[0], Y[1], Y[2], bx0, bx1, by0, by1, na, nb, nc, da, db, dc, nearestV})
-      hn::Store(v, d, lane[field++]);
-    hn::Store(hn::VecFromMask(d, front), d, lane[field]);
+    // (One store per field: a braced list of the vectors would be copied whole first.)
+    for (int k = 0; k < 3; ++k) {
+      hn::Store(X[k], d, lane[k]);
+      hn::Store(Y[k], d, lane[3 + k]);
+    }
+    hn::Store(bx0, d, lane[6]), hn::Store(bx1, d, lane[7]), hn::Store(by0, d, lane[8]), hn::Store(by1, d, lane[9]);
+    hn::Store(na, d, lane[10]), hn::Store(nb, d, lane[11]), hn::Store(nc, d, lane[12]);
+    hn::Store(da, d, lane[13]), hn::Store(db, d, lane[14]), hn::Store(dc, d, lane[15]);
+    hn::Store(nearestV, d, lane[16]);
+    hn::Store(hn::VecFromMask(d, front), d, lane[17]);
     uint8_t survivorBits[8] = {};
     hn::StoreMaskBits(d, survivors, survivorBits);
     for (unsigned bits = survivorBits[0]; bits; bits &= bits - 1) {
