@@ -325,17 +325,18 @@ template <DepthStorage S, DepthMapping M, class Fn>
 bool anyStoredIn(const TileScratch& s, const DepthSetup& depth, int tx0, int ty0, int x0, int y0, int x1, int y1,
                  Fn&& fn) {
   constexpr int kBlocksX = kTileSize / kBlockSize;
-  const SetupTriangle* plane = s.state == TileState::Plane ? s.plane
-                               : s.state == TileState::Pixels && s.blockKey[(y0 / kBlockSize) * kBlocksX + x0 / kBlockSize]
-                                   ? s.blockTriangle[(y0 / kBlockSize) * kBlocksX + x0 / kBlockSize]
-                                   : nullptr;
+  const int block = (y0 / kBlockSize) * kBlocksX + x0 / kBlockSize;  // (state Pixels: the only one)
+  const SetupTriangle* plane = s.state == TileState::Plane                            ? s.plane
+                               : s.state == TileState::Pixels && s.blockKey[block] ? s.blockTriangle[block]
+                                                                                    : nullptr;
+  const bool cleared = s.state == TileState::Clear || (s.state == TileState::Pixels && s.blockClear[block]);
   const double clear = double(quantizeDepth<S>(depth.format.clearValue()));
   const MappedPlanes m = plane ? planesOf<M>(*plane, depth) : MappedPlanes{};
   for (int y = y0; y <= y1; ++y)
     for (int x = x0; x <= x1; ++x) {
-      const double v = plane ? planeStored<S>(m, tx0 + x, ty0 + y)
-                       : s.state == TileState::Clear ? clear
-                                                     : s.depth[size_t(y) * kTileSize + size_t(x)];
+      const double v = plane     ? planeStored<S>(m, tx0 + x, ty0 + y)
+                       : cleared ? clear
+                                 : s.depth[size_t(y) * kTileSize + size_t(x)];
       if (fn(v)) return true;
     }
   return false;

@@ -131,10 +131,13 @@ struct alignas(64) TileScratch {
   double tileFar;   // no stored value is farther (conservative; stale while tileFarStale)
   double tileNear;  // no stored value is nearer (conservative)
   bool tileFarStale;
-  // After prepareResolve(): nothing was drawn in the block (its buffers were left as they were).
-  bool blockEmpty[kBlocksPerTile];
+  // State Pixels, per block: every pixel of the block holds the clear value and its buffers are
+  // stale — a cleared tile's blocks wholly in the image, until a triangle lands on them (the
+  // lazily written state of blockKey, for nothing drawn); after prepareResolve(), also a block
+  // where nothing was drawn.
+  bool blockClear[kBlocksPerTile];
   // State Pixels after prepareResolve(): the buffers of the blocks without blockKey or
-  // blockEmpty hold the frame's values, not depth and keys (see prepareResolve).
+  // blockClear hold the frame's values, not depth and keys (see prepareResolve).
   bool resolved;
   TileState state;
   const SetupTriangle* plane;  // state Plane: the triangle, and its key
@@ -187,7 +190,7 @@ void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids
 /// Readies a tile that rasterizeTile(ids = true) left in `scratch` for resolveTile() with ids
 /// (FrameOutputs::All or IdsAndDepth), right after rasterizing, while the tile's set-up
 /// triangles are still in this core's cache. A block won wholly by one triangle gets it as its
-/// blockKey, one where nothing was drawn blockEmpty (both resolved a row of lanes at a time);
+/// blockKey, one where nothing was drawn blockClear (both resolved a row of lanes at a time);
 /// in the other blocks held pixel by pixel, each pixel is turned, in place, into what the frame
 /// gets — depth[i] becomes (float eye depth, int32 face
 /// id), triangle[i] (int32 triangle id, Rgba8 colour) — so that the resolve, which writes the
