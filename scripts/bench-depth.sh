@@ -24,7 +24,7 @@ echo "date: $(date -u '+%Y-%m-%d %H:%M UTC'); commit: $(git rev-parse --short HE
 echo "cpu: $(grep -m1 "model name" /proc/cpuinfo | cut -d: -f2- | sed "s/^ //"), $(nproc) cores"
 echo "size 1920x1080, $rounds alternating rounds of $frames frames (2 warm-up), --threads $threads, depth f32:reversed"
 echo
-echo "| scene | triangles | depth image ms | occlusion buffer ms | occlusion buffer, back faces culled, ms | MOC ms (issue's figure, 1 thread, MOC's default back-face culling) | target ms |"
+echo "| scene | triangles | depth image ms | occlusion buffer ms | occlusion buffer, back faces culled, ms | MOC ms (issue's figure, 1 thread) | target ms |"
 echo "|---|---:|---:|---:|---:|---:|---:|"
 median_of() {  # hsr bench ... --json -> median_ms
   "$hsr" bench "$@" --size 1920x1080 --frames "$frames" --warmup 2 --threads "$threads" --json |
