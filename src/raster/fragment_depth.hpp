@@ -78,10 +78,33 @@ inline MappedPlanes mapPlanesRaw(const Plane& N, const Plane& D, double n, doubl
   }
 }
 
+/// The reciprocal normalize() took last, for a rasterizer mapping triangle after triangle:
+/// with a perspective camera every triangle's constant Q is the same ((f - n) N, N = 1) for z,
+/// reversed and inv, and the same Q gives the same reciprocal — so normalize(m, cache) is
+/// normalize(m) bit for bit, without a division per triangle.
+struct ReciprocalCache {
+  double q = 0, r = 0;  // q = 0: nothing kept (normalize divides only by q >= the least normal)
+};
+inline MappedPlanes normalize(MappedPlanes m, ReciprocalCache& cache) {
+  if (m.q.a == 0 && m.q.b == 0 && m.q.c >= std::numeric_limits<double>::min() &&
+      m.q.c <= std::numeric_limits<double>::max()) {
+    if (m.q.c != cache.q) cache = {m.q.c, 1.0 / m.q.c};
+    const double r = cache.r;
+    m.p = Plane{m.p.a * r, m.p.b * r, m.p.c * r};
+    m.q = Plane{0.0, 0.0, 1.0};
+    m.affine = true;
+  }
+  return m;
+}
+
 /// P and Q of mapping M, normalized (see normalize()): what every rasterizer uses.
 template <DepthMapping M>
 inline MappedPlanes mapPlanes(const Plane& N, const Plane& D, double n, double f, bool ortho) {
   return normalize(mapPlanesRaw<M>(N, D, n, f, ortho));
+}
+template <DepthMapping M>
+inline MappedPlanes mapPlanes(const Plane& N, const Plane& D, double n, double f, bool ortho, ReciprocalCache& cache) {
+  return normalize(mapPlanesRaw<M>(N, D, n, f, ortho), cache);
 }
 
 /// The stored value (as double: exact for every storage) of the ratio p / q: clamped to [0, 1]

@@ -299,17 +299,19 @@ void RasterizeTileT(const TileJob& job) {
   // values stay valid bounds meanwhile: writes only bring stored values nearer).
   uint64_t dirtyBlocks = 0;
   unsigned sinceRefresh = 0;
+  ReciprocalCache reciprocal;  // mapPlanes' division, once for the tile's triangles that share it
 
   // The tile's triangles, roughly nearest first (orderTile): any order gives the same image.
   const std::vector<TileEntry>& order = orderTile(bins, job.tile, kGreater, *job.order);
   for (size_t item = 0, end = order.size(); item < end; ++item) {
-    const SetupTriangle& t = *order[item].triangle;
+    const SetupTriangle& t = bins.triangle(order[item].key);
     // The records are scattered over the chunks: fetch ahead those of triangles the tile's
     // bound does not reject already (nearest first, most hidden ones are rejected unread).
     constexpr size_t kAhead = 12;
     if (item + kAhead < end && !Beaten<M, kIds>(order[item + kAhead].nearest, s.tileFar)) {
-      hwy::Prefetch(order[item + kAhead].triangle);
-      hwy::Prefetch(reinterpret_cast<const char*>(order[item + kAhead].triangle) + 64);
+      const SetupTriangle* ahead = &bins.triangle(order[item + kAhead].key);
+      hwy::Prefetch(ahead);
+      hwy::Prefetch(reinterpret_cast<const char*>(ahead) + 64);
     }
     const uint64_t key = order[item].key;
     // Early rejection: the triangle's nearest possible value is farther than the farthest
@@ -342,7 +344,7 @@ void RasterizeTileT(const TileJob& job) {
       continue;
     }
     const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
-    const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, n, f, ortho);
+    const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, n, f, ortho, reciprocal);
 
     // Whole tile: the triangle covers every pixel centre of the tile (its four corner centres;
     // coverage is convex) and its farthest value is nearer than the nearest stored: it wins

@@ -256,12 +256,10 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater
   bool finite = true;
   for (size_t c = 0; c < bins.chunkCount; ++c) {
     const ChunkBins& cb = bins.chunks[c];
-    const SetupTriangle* tris = bins.triangles[c];
     const uint64_t chunkKey = triangleKey(c, 0);
     for (uint32_t item = cb.start[size_t(tile)], end = cb.start[size_t(tile) + 1]; item < end; ++item) {
-      const uint32_t ti = cb.items[item];
       const double v = cb.itemNearest[item];
-      *entry++ = {tris + ti, v, chunkKey + ti};
+      *entry++ = {chunkKey + cb.items[item], v};
       lo = std::min(lo, v);
       hi = std::max(hi, v);
       finite &= v - v == 0;  // false for infinities and NaN

@@ -105,11 +105,11 @@ struct RasterCounters {
 /// Pixels: the buffers hold every pixel's value.
 enum class TileState : uint8_t { Clear, Plane, Pixels };
 
-/// One triangle binned to a tile, as the kernel visits it.
+/// One triangle binned to a tile, as the kernel visits it (16 bytes: the set-up triangle is
+/// Bins::triangle(key)).
 struct TileEntry {
-  const SetupTriangle* triangle;
-  double nearest;  // its nearest bound (FrontEndChunk::nearest)
   uint64_t key;    // triangleKey: submission order
+  double nearest;  // its nearest bound (FrontEndChunk::nearest)
 };
 
 /// A worker's tile: stored depth (as double: every format's values are exact in it) and the
