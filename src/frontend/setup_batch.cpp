@@ -109,12 +109,15 @@ HWY_INLINE V NearestStored(const DepthSetup& depth, const PlaneV& N, const Plane
                             hn::And(hn::IsFinite(pMax), hn::IsFinite(qMax)));
   const V margin = hn::Set(d, 1e-12);
   V v;
+  // (When every lane is affine, as with a perspective camera and z, reversed or inv, the
+  // quotients are not needed: two vector divisions less.)
+  const bool allConstant = hn::AllTrue(d, constant);
   if (greater) {  // highStored: the largest value (just pMax when affine)
-    v = hn::IfThenElse(hn::Ge(pMax, hn::Zero(d)), hn::Div(pMax, qMin), hn::Div(pMax, qMax));
+    v = allConstant ? pMax : hn::IfThenElse(hn::Ge(pMax, hn::Zero(d)), hn::Div(pMax, qMin), hn::Div(pMax, qMax));
     v = hn::IfThenElse(constant, pMax, v);
     v = hn::Add(v, hn::Mul(hn::Abs(v), margin));
   } else {  // lowStored: the smallest
-    v = hn::IfThenElse(hn::Ge(pMin, hn::Zero(d)), hn::Div(pMin, qMax), hn::Div(pMin, qMin));
+    v = allConstant ? pMin : hn::IfThenElse(hn::Ge(pMin, hn::Zero(d)), hn::Div(pMin, qMax), hn::Div(pMin, qMin));
     v = hn::IfThenElse(constant, pMin, v);
     v = hn::Sub(v, hn::Mul(hn::Abs(v), margin));
   }
@@ -202,13 +205,21 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
         const M topLeft = hn::Or(hn::Lt(edy[i], zero), hn::And(hn::Eq(edy[i], zero), hn::Gt(edx[i], zero)));
         ebias[i] = hn::IfThenElseZero(hn::Not(topLeft), hn::Set(d, 1.0));
       }
+      // Each edge function at the corner centre, then stepped by whole pixels (A = -dy, B = dx
+      // per 1/256 pixel): every value is an integer below 2^53, exact in any order.
       static constexpr int kOffsets[8][2] = {{0, 0}, {1, 0}, {2, 0}, {3, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}};
+      const V px = hn::Add(hn::Mul(bx0, one), half), py = hn::Add(hn::Mul(by0, one), half);
+      V corner[3], stepA[3], stepB[3];
+      for (int i = 0; i < 3; ++i) {
+        corner[i] = hn::Sub(hn::Mul(edx[i], hn::Sub(py, Y[i])), hn::Mul(edy[i], hn::Sub(px, X[i])));
+        stepA[i] = hn::Mul(hn::Neg(edy[i]), one);
+        stepB[i] = hn::Mul(edx[i], one);
+      }
       for (const auto& o : kOffsets) {
         const V ox = hn::Set(d, double(o[0])), oy = hn::Set(d, double(o[1]));
         M inside = hn::And(hn::Lt(ox, bw), hn::Lt(oy, bh));
-        const V px = hn::Add(hn::Mul(hn::Add(bx0, ox), one), half), py = hn::Add(hn::Mul(hn::Add(by0, oy), one), half);
         for (int i = 0; i < 3; ++i) {
-          const V e = hn::Sub(hn::Mul(edx[i], hn::Sub(py, Y[i])), hn::Mul(edy[i], hn::Sub(px, X[i])));
+          const V e = hn::Add(hn::Add(corner[i], hn::Mul(ox, stepA[i])), hn::Mul(oy, stepB[i]));
           inside = hn::And(inside, hn::Ge(e, ebias[i]));
         }
         covers = hn::Or(covers, inside);
