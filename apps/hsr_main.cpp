@@ -431,6 +431,8 @@ int runBench(const BenchFlags& f) {
   out["min_ms"] = sorted.front();
   out["frame_ms"] = frameMs;
   out["build"] = {{"version", HSR_VERSION},
+                  {"build_type", HSR_BUILD_TYPE},
+                  {"flags", HSR_BUILD_FLAGS},
 #ifdef __clang__
                   {"compiler", "clang " __clang_version__},
 #else

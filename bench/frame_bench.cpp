@@ -169,6 +169,8 @@ int main(int argc, char** argv) {
   benchmark::AddCustomContext("tile_size", std::to_string(hsr::tiled::kTileSize));
   benchmark::AddCustomContext("hardware_threads", std::to_string(hsr::resolveThreads(0)));
   benchmark::AddCustomContext("size", std::to_string(hsr::kWidth) + "x" + std::to_string(hsr::kHeight));
+  benchmark::AddCustomContext("build_type", HSR_BUILD_TYPE);
+  benchmark::AddCustomContext("build_flags", HSR_BUILD_FLAGS);
 #ifdef NDEBUG
   benchmark::AddCustomContext("assertions", "off");
 #else

@@ -177,6 +177,8 @@ TEST_F(CommandLine, BenchJsonHasTimesAndStatistics) {
   EXPECT_EQ(bench["width"], 64);
   EXPECT_TRUE(bench.contains("covered_pixels"));
   EXPECT_FALSE(bench["kernel_isa"].get<std::string>().empty());
+  EXPECT_NE(bench["build"]["flags"].get<std::string>().find("-ffp-contract=off"), std::string::npos);
+  EXPECT_TRUE(bench["build"].contains("build_type"));
   EXPECT_FALSE(bench["cpu"].get<std::string>().empty());
 }
 
