@@ -32,15 +32,12 @@ void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt
 
 int prepareTilePass(TiledState& state, int threads) {
   const tiled::Bins& bins = state.bins;
-  size_t work = 0, mostEntries = 0;
-  for (int tile = 0; tile < bins.tileCount(); ++tile) {
-    const size_t entries = bins.entries(tile);
-    work += entries + kWorkPerTile;
-    mostEntries = std::max(mostEntries, entries);
-  }
+  // Every binned pair, chunk by chunk (not tile by tile: that is a pass over every chunk's lists
+  // per tile, on one thread). The visit lists grow to the fullest tile a worker meets, once.
+  size_t work = size_t(bins.tileCount()) * kWorkPerTile;
+  for (size_t c = 0; c < bins.chunkCount; ++c) work += bins.chunks[c].items.size();
   const int workers = int(std::clamp<size_t>(work / kWorkPerThread, 1, size_t(threads)));
   if (state.orders.size() < size_t(workers)) state.orders.resize(size_t(workers));
-  for (tiled::TileOrder& order : state.orders) order.reserve(mostEntries);  // any worker may meet the fullest tile
   state.counters.assign(size_t(bins.tileCount()), {});
   state.covered.assign(size_t(bins.tileCount()), 0);
   return workers;

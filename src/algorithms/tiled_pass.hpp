@@ -32,8 +32,7 @@ void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt
 
 /// How many workers the binned frame's tile pass is worth (at most `threads`; small frames run
 /// on fewer, as handing work to a pool thread costs about as much as the kernel spends on ~4000
-/// small triangles), with one visit list each, reserved for the fullest tile, and the per-tile
-/// counters cleared.
+/// small triangles), with one visit list each, and the per-tile counters cleared.
 int prepareTilePass(TiledState& state, int threads);
 
 /// The statistics every tiled pass reports (CONVENTIONS.md keys): the front end's counts and the

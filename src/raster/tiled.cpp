@@ -237,12 +237,6 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
   cb.start[0] = 0;
 }
 
-void TileOrder::reserve(size_t n) {
-  entries.reserve(n);
-  ordered.reserve(n);
-  bucket.reserve(n);
-}
-
 uint64_t TileOrder::memoryBytes() const {
   return (entries.capacity() + ordered.capacity()) * sizeof(TileEntry) + bucket.capacity();
 }
@@ -250,7 +244,7 @@ uint64_t TileOrder::memoryBytes() const {
 const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater, TileOrder& order) {
   std::vector<TileEntry>& in = order.entries;
   std::vector<TileEntry>& out = order.ordered;
-  in.resize(bins.entries(tile));  // (capacity reserved by the caller: no allocation once warm)
+  in.resize(bins.entries(tile));  // (grows to the fullest tile met: no allocation once warm)
   TileEntry* entry = in.data();
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   bool finite = true;

@@ -149,7 +149,6 @@ struct alignas(64) TileScratch {
 struct TileOrder {
   std::vector<TileEntry> entries, ordered;
   std::vector<uint8_t> bucket;
-  void reserve(size_t n);
   uint64_t memoryBytes() const;
 };
 
