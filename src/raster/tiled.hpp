@@ -16,7 +16,8 @@
 // makes it that triangle's plane in O(1) (TileState); likewise an 8x8 block for a triangle
 // parallel to the image plane (TileScratch::blockKey), and each block of a plane tile that a
 // triangle then covers only in part: the tile's blocks keep the plane, with bounds from its
-// corners, until something lands on them. Values are computed from the plane, bit for bit as
+// corners, until something lands on them — as a cleared tile's blocks stay cleared
+// (TileScratch::blockClear). Values are computed from the plane, bit for bit as
 // the kernel would have stored them, when a triangle covers part of a block or at resolve.
 //
 // Early rejection (the base for a hierarchical z-buffer): each tile and each 8x8 block keeps
