@@ -29,6 +29,27 @@ namespace {
 const char* kStorages[] = {"u16", "u24", "u32", "f32"};
 const char* kMappings[] = {"z", "reversed", "inv", "linear"};
 
+// A built-in scene through the front end (with the default depth format's nearest bounds) and
+// binned, every chunk, for tests that drive the tile pass themselves. Not copyable: the bins
+// point into the front end's chunks.
+struct BinnedScene {
+  Scene scene;
+  Camera cam;
+  DepthSetup depth;
+  FrontEndOutput fe;
+  tiled::Bins bins;
+  BinnedScene(const std::string& spec, int width, int height)
+      : scene(loadScene(spec)),
+        cam(resolveCamera(*scene.camera, width, height, scene.bounds())),
+        depth{DepthFormat{}, cam.near, cam.far, cam.orthographic} {
+    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
+    tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
+    for (size_t c = 0; c < fe.chunkCount; ++c) tiled::binChunk(bins, c, fe.chunks[c]);
+  }
+  BinnedScene(const BinnedScene&) = delete;
+  BinnedScene& operator=(const BinnedScene&) = delete;
+};
+
 std::vector<DepthFormat> allFormats() {
   std::vector<DepthFormat> formats;
   for (const char* s : kStorages)
@@ -378,14 +399,9 @@ TEST_F(TiledMixed, LayersSphereAndSoupTogetherAreIdentical) {
 // to the reference (tests above).
 TEST(Tiled, TrianglesInFrontOfAWholeTileReplaceIt) {
   for (const char* order : {"back-to-front", "front-to-back"}) {
-    const Scene scene = loadScene(std::string("builtin:layers?n=10&order=") + order);
-    const Camera cam = resolveCamera(*scene.camera, 256, 192, scene.bounds());
-    const DepthSetup depth{DepthFormat{}, cam.near, cam.far, cam.orthographic};
-    FrontEndOutput fe;
-    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
-    tiled::Bins bins;
-    tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
-    for (size_t c = 0; c < fe.chunkCount; ++c) tiled::binChunk(bins, c, fe.chunks[c]);
+    const BinnedScene binned(std::string("builtin:layers?n=10&order=") + order, 256, 192);
+    const tiled::Bins& bins = binned.bins;
+    const DepthSetup& depth = binned.depth;
     auto scratch = std::make_unique<tiled::TileScratch>();
     tiled::TileOrder lists;
     tiled::RasterCounters counters;
@@ -446,20 +462,15 @@ TEST(Tiled, TrianglesBehindATriangleCoveringTheTileAreNotBinned) {
 // A tile held pixel by pixel is resolved from the cells prepareResolve fills; resolving it
 // without that step is a programming error, reported, not a wrong image.
 TEST(Tiled, ResolvingIdsNeedsPrepareResolve) {
-  const Scene scene = loadScene("builtin:random?n=200");
-  const Camera cam = resolveCamera(*scene.camera, 128, 96, scene.bounds());
-  const DepthSetup depth{DepthFormat{}, cam.near, cam.far, cam.orthographic};
-  FrontEndOutput fe;
-  runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
-  tiled::Bins bins;
-  tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
-  for (size_t c = 0; c < fe.chunkCount; ++c) tiled::binChunk(bins, c, fe.chunks[c]);
+  const BinnedScene binned("builtin:random?n=200", 128, 96);
+  const tiled::Bins& bins = binned.bins;
+  const DepthSetup& depth = binned.depth;
   auto scratch = std::make_unique<tiled::TileScratch>();
   tiled::TileOrder lists;
   tiled::RasterCounters counters;
-  const TriangleShader shade(scene, cam, Shading::Flat);
+  const TriangleShader shade(binned.scene, binned.cam, Shading::Flat);
   Frame frame;
-  frame.allocate(cam.width, cam.height);
+  frame.allocate(binned.cam.width, binned.cam.height);
   int pixelTiles = 0;
   for (int tile = 0; tile < bins.tileCount(); ++tile) {
     tiled::rasterizeTile(bins, tile, depth, true, *scratch, lists, counters);

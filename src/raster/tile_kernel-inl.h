@@ -122,9 +122,29 @@ HWY_INLINE double NearestLane(V v) {
   return hn::GetLane(kGreater ? hn::MaxOfLanes(d, v) : hn::MinOfLanes(d, v));
 }
 
+// The tile's part of the image: origin and size.
+struct TileRect {
+  int x0, y0, w, h;
+};
+HWY_INLINE TileRect RectOf(const TileJob& job) {
+  const Bins& bins = *job.bins;
+  const int x0 = (job.tile % bins.tilesX) * kTileSize, y0 = (job.tile / bins.tilesX) * kTileSize;
+  return {x0, y0, std::min(kTileSize, bins.width - x0), std::min(kTileSize, bins.height - y0)};
+}
+
+// Eye depths of triangle t at the pixel centres X (lanes) of the row whose centre is Y, with the
+// operations of SetupTriangle::eyeDepth (as the reference resolves them).
+HWY_INLINE V EyeDepthRow(const SetupTriangle& t, V X, double Y) {
+  const D d;
+  const V num = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthNum.a), X), hn::Set(d, t.depthNum.b * Y)),
+                        hn::Set(d, t.depthNum.c));
+  const V den = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthDen.a), X), hn::Set(d, t.depthDen.b * Y)),
+                        hn::Set(d, t.depthDen.c));
+  return hn::Div(num, den);
+}
+
 // The tile's part of the image and the constants of its depth format.
-struct TileFrame {
-  int x0, y0, w, h;       // origin and size in the image
+struct TileFrame : TileRect {
   double clear;           // the format's clear value, as stored
   double nearestPossible; // stored in cells outside the image: never drawn, never the farthest
   double farthestPossible;
@@ -133,12 +153,8 @@ struct TileFrame {
 template <DepthStorage S, DepthMapping M>
 TileFrame MakeTileFrame(const TileJob& job) {
   constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
-  const Bins& bins = *job.bins;
   TileFrame f;
-  f.x0 = (job.tile % bins.tilesX) * kTileSize;
-  f.y0 = (job.tile / bins.tilesX) * kTileSize;
-  f.w = std::min(kTileSize, bins.width - f.x0);
-  f.h = std::min(kTileSize, bins.height - f.y0);
+  static_cast<TileRect&>(f) = RectOf(job);
   f.clear = double(quantizeDepth<S>(job.depth.format.clearValue()));
   constexpr double inf = std::numeric_limits<double>::infinity();
   f.nearestPossible = kGreater ? inf : -inf;
@@ -666,8 +682,7 @@ void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
   const hn::Rebind<uint32_t, D> du32;
   const size_t N = hn::Lanes(d);
   const Bins& bins = *job.bins;
-  const int x0 = (job.tile % bins.tilesX) * kTileSize, y0 = (job.tile / bins.tilesX) * kTileSize;
-  const int w = std::min(kTileSize, bins.width - x0), h = std::min(kTileSize, bins.height - y0);
+  const auto [x0, y0, w, h] = RectOf(job);
   ColorCache colorOf{job.shader};
   const uint64_t emptyDepth = PackCell(Bits32(std::numeric_limits<float>::infinity()), Bits32(int32_t(-1)));
   const uint64_t emptyTriangle = PackCell(Bits32(int32_t(-1)), kColor ? Bits32(background) : 0);
@@ -700,11 +715,7 @@ void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
         if (first != 0 && hn::AllTrue(du, hn::Eq(hn::Load(du, keys), hn::Set(du, first)))) {
           const SetupTriangle& t = bins.triangle(first);
           const V X = hn::Iota(d, double(x0 + bx + int(k)) + 0.5);
-          const V num = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthNum.a), X), hn::Set(d, t.depthNum.b * Y)),
-                                hn::Set(d, t.depthNum.c));
-          const V den = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthDen.a), X), hn::Set(d, t.depthDen.b * Y)),
-                                hn::Set(d, t.depthDen.c));
-          const auto eye = hn::BitCast(du32, hn::DemoteTo(df, hn::Div(num, den)));
+          const auto eye = hn::BitCast(du32, hn::DemoteTo(df, EyeDepthRow(t, X, Y)));
           hn::Store(hn::Or(hn::PromoteTo(du, eye), hn::Set(du, PackCell(0, Bits32(int32_t(t.face))))), du, cells);
           const uint32_t color = kColor ? colorOf(first, t) : 0;
           hn::Store(hn::Set(du, PackCell(Bits32(int32_t(t.triangle)), color)), du, keys);
@@ -739,8 +750,7 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
   const hn::Rebind<uint32_t, D> du32;
   const size_t N = hn::Lanes(d);
   const Bins& bins = *job.bins;
-  const int x0 = (job.tile % bins.tilesX) * kTileSize, y0 = (job.tile / bins.tilesX) * kTileSize;
-  const int w = std::min(kTileSize, bins.width - x0), h = std::min(kTileSize, bins.height - y0);
+  const auto [x0, y0, w, h] = RectOf(job);
   if (s.state == TileState::Pixels && !s.resolved)
     throw std::logic_error("resolveTile: a tile held pixel by pixel was not through prepareResolve");
   ColorCache colorOf{job.shader};
@@ -783,11 +793,7 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
       }
       const SetupTriangle& t = bins.triangle(key);
       const V X = hn::Iota(d, double(x0 + int(k)) + 0.5);
-      const V num = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthNum.a), X), hn::Set(d, t.depthNum.b * Y)),
-                            hn::Set(d, t.depthNum.c));
-      const V den = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthDen.a), X), hn::Set(d, t.depthDen.b * Y)),
-                            hn::Set(d, t.depthDen.c));
-      StorePartial(hn::BitCast(du32, hn::DemoteTo(df, hn::Div(num, den))), du32, count, depthOut);
+      StorePartial(hn::BitCast(du32, hn::DemoteTo(df, EyeDepthRow(t, X, Y))), du32, count, depthOut);
       StorePartial(hn::Set(du32, Bits32(int32_t(t.face))), du32, count, faceOut);
       StorePartial(hn::Set(du32, Bits32(int32_t(t.triangle))), du32, count, triangleOut);
       if constexpr (kColor) StorePartial(hn::Set(du32, colorOf(key, t)), du32, count, colorOut);
