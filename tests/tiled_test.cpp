@@ -478,7 +478,7 @@ TEST(Tiled, ResolvingIdsNeedsPrepareResolve) {
     ++pixelTiles;
     EXPECT_THROW(tiled::resolveTile(bins, tile, depth, FrameOutputs::All, &shade, Rgba8{}, *scratch, frame),
                  std::logic_error);
-    tiled::prepareResolve(bins, tile, depth, FrameOutputs::All, &shade, Rgba8{}, *scratch);
+    tiled::prepareResolve(bins, tile, FrameOutputs::All, &shade, Rgba8{}, *scratch);
     EXPECT_GT(tiled::resolveTile(bins, tile, depth, FrameOutputs::All, &shade, Rgba8{}, *scratch, frame), 0u);
   }
   EXPECT_GT(pixelTiles, 0);

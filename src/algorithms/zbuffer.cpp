@@ -123,7 +123,7 @@ void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const Triangle
       for (int i = 0; i < count; ++i) {
         tiled::rasterizeTile(bins, first + i, depth, ids, scratch[i], state.orders[worker],
                              state.counters[size_t(first + i)]);
-        if (ids) tiled::prepareResolve(bins, first + i, depth, opt.outputs, &shade, opt.background, scratch[i]);
+        if (ids) tiled::prepareResolve(bins, first + i, opt.outputs, &shade, opt.background, scratch[i]);
       }
       for (int row = 0; row < tiled::kTileSize; row += kResolveBand)
         for (int i = 0; i < count; ++i)

@@ -47,17 +47,6 @@ struct MappedPlanes {
 /// orthographic camera D = 1 / w = 1 makes it constant for z, reversed and linear): the mapped
 /// depth is affine in the image — the property GPUs' z / w has — and normalize() turns P / Q
 /// into P' = P * (1 / Q), one division per triangle instead of one per fragment.
-inline MappedPlanes normalize(MappedPlanes m) {
-  if (m.q.a == 0 && m.q.b == 0 && m.q.c >= std::numeric_limits<double>::min() &&
-      m.q.c <= std::numeric_limits<double>::max()) {
-    const double r = 1.0 / m.q.c;
-    m.p = Plane{m.p.a * r, m.p.b * r, m.p.c * r};
-    m.q = Plane{0.0, 0.0, 1.0};
-    m.affine = true;
-  }
-  return m;
-}
-
 template <DepthMapping M>
 inline MappedPlanes mapPlanesRaw(const Plane& N, const Plane& D, double n, double f, bool ortho) {
   auto combine = [](double s, const Plane& a, double t, const Plane& b) {  // s a + t b
@@ -95,6 +84,10 @@ inline MappedPlanes normalize(MappedPlanes m, ReciprocalCache& cache) {
     m.affine = true;
   }
   return m;
+}
+inline MappedPlanes normalize(MappedPlanes m) {
+  ReciprocalCache none;
+  return normalize(m, none);
 }
 
 /// P and Q of mapping M, normalized (see normalize()): what every rasterizer uses.

@@ -323,7 +323,7 @@ void RasterizeTileT(const TileJob& job) {
     const SetupTriangle& t = bins.triangle(order[item].key);
     // The records are scattered over the chunks: fetch ahead those of triangles the tile's
     // bound does not reject already (nearest first, most hidden ones are rejected unread).
-    constexpr size_t kAhead = 12;
+    constexpr size_t kAhead = 6;
     if (item + kAhead < end && !Beaten<M, kIds>(order[item + kAhead].nearest, s.tileFar)) {
       const SetupTriangle* ahead = &bins.triangle(order[item + kAhead].key);
       hwy::Prefetch(ahead);
@@ -668,8 +668,8 @@ struct ColorCache {
   }
 };
 
-// prepareResolve (tiled.hpp) for a tile in state Pixels: every block held pixel by pixel (no
-// blockKey) turned in place into the frame's values — face id, triangle id and the eye depth of
+// prepareResolve (tiled.hpp) for a tile in state Pixels: every block held pixel by pixel (not
+// Lazy: neither blockKey nor blockClear) turned in place into the frame's values — face id, triangle id and the eye depth of
 // the winning triangle's planes at the pixel centre, as the reference resolves it (the same
 // operations as SetupTriangle::eyeDepth; a row of lanes won by one triangle with vectors), or
 // the background where nothing was drawn.
@@ -767,10 +767,9 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
       uint32_t* faceOut = reinterpret_cast<uint32_t*>(frame.faceId.data() + at);
       uint32_t* triangleOut = reinterpret_cast<uint32_t*>(frame.triangleId.data() + at);
       uint32_t* colorOut = reinterpret_cast<uint32_t*>(frame.color.data() + at);
-      const uint64_t blockKey =
-          s.state == TileState::Pixels ? s.blockKey[(y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize] : 0;
-      const bool empty =
-          s.state == TileState::Pixels && s.blockClear[(y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize];
+      const int b = (y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize;  // (lanes within one block)
+      const uint64_t blockKey = s.state == TileState::Pixels ? s.blockKey[b] : 0;
+      const bool empty = s.state == TileState::Pixels && s.blockClear[b];
       if (s.state == TileState::Pixels && !blockKey && !empty) {  // the cells prepareResolve filled
         hn::Vec<decltype(du32)> eye, face, triangle, color;
         hn::LoadInterleaved2(du32, reinterpret_cast<const uint32_t*>(s.depth + size_t(y) * kTileSize + k), eye, face);

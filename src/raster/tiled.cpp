@@ -283,9 +283,9 @@ void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids
   HWY_DYNAMIC_DISPATCH(RasterizeTile)(job);
 }
 
-void prepareResolve(const Bins& bins, int tile, const DepthSetup& depth, FrameOutputs outputs,
-                    const TriangleShader* shader, Rgba8 background, TileScratch& scratch) {
-  const TileJob job{&bins, tile, depth, true, &scratch, nullptr, shader, nullptr};
+void prepareResolve(const Bins& bins, int tile, FrameOutputs outputs, const TriangleShader* shader, Rgba8 background,
+                    TileScratch& scratch) {
+  const TileJob job{&bins, tile, DepthSetup{}, true, &scratch, nullptr, shader, nullptr};  // (depth: not read)
   HWY_DYNAMIC_DISPATCH(PrepareResolve)(job, outputs, background);
 }
 

@@ -198,8 +198,8 @@ void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids
 /// at resolve, the records had left the cache: 40% of the resolve's samples were that load on
 /// the million-triangle sphere.) Depth and keys are gone afterwards (TileScratch::resolved).
 /// `shader` and `background`: colour, for FrameOutputs::All only.
-void prepareResolve(const Bins& bins, int tile, const DepthSetup& depth, FrameOutputs outputs,
-                    const TriangleShader* shader, Rgba8 background, TileScratch& scratch);
+void prepareResolve(const Bins& bins, int tile, FrameOutputs outputs, const TriangleShader* shader, Rgba8 background,
+                    TileScratch& scratch);
 
 /// Writes every pixel of the tile of `scratch` into `frame` as `outputs` asks: ids, eye depth
 /// of the winning triangle's plane at the pixel centre (exactly as the reference resolves it),
