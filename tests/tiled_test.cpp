@@ -252,7 +252,7 @@ TEST(Tiled, BinsAreInSubmissionOrderWhateverTheChunkOrder) {
       const tiled::ChunkBins& cb = bins.chunks[c];
       for (int t = 0; t < bins.tileCount(); ++t)
         for (uint32_t k = cb.start[size_t(t)]; k < cb.start[size_t(t) + 1]; ++k)
-          lists[size_t(t)].emplace_back(base + cb.items[k], cb.itemNearest[k]);
+          lists[size_t(t)].emplace_back(base + tiled::localIndex(cb.items[k]), cb.itemNearest[k]);
       base += fe.chunks[c].triangles.size();
     }
     return lists;
@@ -514,7 +514,7 @@ TEST(Tiled, EqualDepthGoesToTheTriangleSubmittedFirstWhateverTheVisitOrder) {
     tiled::TileOrder lists;
     const std::vector<tiled::TileEntry>& order = tiled::orderTile(bins, 0, greater, lists);
     ASSERT_EQ(order.size(), 2u);
-    EXPECT_EQ(order[0].key, tiled::triangleKey(0, 1)) << f;  // the second triangle first
+    EXPECT_EQ(order[0].key, tiled::triangleKey(0, tiled::localKey(1, false, 1))) << f;  // the second triangle first
     tiled::rasterizeTile(bins, 0, depth, true, *scratch, lists, counters);
     size_t covered = 0;
     for (int y = 0; y < cam.height; ++y)
@@ -522,7 +522,7 @@ TEST(Tiled, EqualDepthGoesToTheTriangleSubmittedFirstWhateverTheVisitOrder) {
         const uint64_t key = scratch->triangle[size_t(y) * tiled::kTileSize + size_t(x)];
         if (!key) continue;
         ++covered;
-        ASSERT_EQ(key, tiled::triangleKey(0, 0)) << f << " pixel " << x << "," << y;
+        ASSERT_EQ(key, tiled::triangleKey(0, tiled::localKey(0, false, 0))) << f << " pixel " << x << "," << y;
       }
     EXPECT_GT(covered, 500u) << f;
     EXPECT_EQ(counters.depthWrites, 2 * covered) << f;  // the second, then the first on every pixel
@@ -531,6 +531,85 @@ TEST(Tiled, EqualDepthGoesToTheTriangleSubmittedFirstWhateverTheVisitOrder) {
     o.depthFormat = depth.format;
     const Frame frame = render(scene, cam, o);
     EXPECT_EQ(std::count(frame.faceId.begin(), frame.faceId.end(), 1), 0) << f;
+  }
+}
+
+// Deferred back faces (tiled.hpp, binChunk): a back face whose box lies in one tile is kept out
+// of the bins until the tile's other triangles are drawn, then drawn only if it may show. On a
+// coplanar pair of opposite winding (the same plane: equal depths on every pixel), the one
+// submitted first must win every pixel, whichever of the two is the deferred back face.
+TEST(Tiled, DeferredBackFaceTiesGoToTheTriangleSubmittedFirst) {
+  for (bool backFirst : {false, true}) {
+    Scene scene;
+    scene.source = "test";
+    scene.positions = {{-1, -1, 0}, {1, -1, 0.5}, {0, 1, 0.25}};
+    const std::vector<uint32_t> front = {0, 1, 2}, back = {0, 2, 1};
+    scene.addFace(std::span<const uint32_t>(backFirst ? back : front), Rgba8{200, 0, 0, 255});
+    scene.addFace(std::span<const uint32_t>(backFirst ? front : back), Rgba8{0, 200, 0, 255});
+    scene.finalize();
+    CameraSpec spec;
+    spec.eye = {0.3, 0.2, 3};
+    spec.target = {0, 0, 0};
+    const Camera cam = resolveCamera(spec, 60, 60, scene.bounds());  // one tile
+    for (const char* f : {"f32:reversed", "u16:z", "u32:linear", "u24:inv"}) {
+      const DepthFormat format = DepthFormat::parse(f);
+      const DepthSetup depth{format, cam.near, cam.far, cam.orthographic};
+      FrontEndOutput fe;
+      runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth, true);
+      ASSERT_EQ(fe.chunks[0].triangles.size(), 1u) << f;
+      ASSERT_EQ(fe.chunks[0].deferred.size(), 1u) << f;  // the back face
+      EXPECT_EQ(fe.chunks[0].deferred[0].face, backFirst ? 0u : 1u) << f;
+      const Frame reference = renderWith(scene, cam, format, RasterKind::HalfSpace, 1);
+      const Frame fast = renderWith(scene, cam, format, RasterKind::Tiled, 1);
+      expectIdentical(reference, fast, std::string(f) + (backFirst ? " back face first" : " front face first"), "");
+      EXPECT_GT(std::count(fast.faceId.begin(), fast.faceId.end(), 0), 500) << f;
+      EXPECT_EQ(std::count(fast.faceId.begin(), fast.faceId.end(), 1), 0) << f;
+    }
+  }
+}
+
+// Deferred back faces change nothing but the work: with them turned off
+// (HSR_DEFER_BACK_FACES=off) every frame is the same bits. Random triangles show many back
+// faces (drawn late, after being set up again); a closed mesh hides nearly all of them, which
+// are then never binned to a tile list, ordered or visited (counted as culled pairs).
+TEST(Tiled, DeferredBackFacesChangeNoBit) {
+  struct Case {
+    const char* scene;
+    bool backFacesShow;
+  };
+  for (const Case& c : {Case{"builtin:random?n=3000&size=0.05", true}, Case{"builtin:sphere?n=20000", false}}) {
+    const Scene scene = loadScene(c.scene);
+    for (const CameraSpec& pose : poses(scene, 2, 5)) {
+      const Camera cam = resolveCamera(pose, 256, 160, scene.bounds());
+      for (const char* f : {"f32:reversed", "u16:z"}) {
+        const DepthFormat format = DepthFormat::parse(f);
+        const DepthSetup depth{format, cam.near, cam.far, cam.orthographic};
+        FrontEndOutput fe;
+        runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth, true);
+        std::set<int32_t> deferred;  // scene triangles
+        for (size_t k = 0; k < fe.chunkCount; ++k)
+          for (const DeferredFace& d : fe.chunks[k].deferred) deferred.insert(int32_t(d.triangle));
+        ASSERT_GT(deferred.size(), 100u) << c.scene;
+        for (FrameOutputs outputs : {FrameOutputs::All, FrameOutputs::DepthOnly})
+          for (int threads : {1, 3}) {
+            const Frame on = renderWith(scene, cam, format, RasterKind::Tiled, threads, outputs);
+            setenv("HSR_DEFER_BACK_FACES", "off", 1);
+            const Frame off = renderWith(scene, cam, format, RasterKind::Tiled, threads, outputs);
+            unsetenv("HSR_DEFER_BACK_FACES");
+            const std::string what = fmt::format("{} {} threads {}", c.scene, f, threads);
+            EXPECT_EQ(on.faceId, off.faceId) << what;
+            EXPECT_EQ(on.triangleId, off.triangleId) << what;
+            EXPECT_EQ(firstDifference(on.depth, off.depth), -1) << what;
+            EXPECT_EQ(firstDifference(on.color, off.color), -1) << what;
+            EXPECT_EQ(on.stats.covered_pixels, off.stats.covered_pixels) << what;
+            if (outputs == FrameOutputs::DepthOnly) continue;
+            const auto shown = std::count_if(on.triangleId.begin(), on.triangleId.end(),
+                                             [&](int32_t t) { return deferred.count(t) > 0; });
+            if (c.backFacesShow) EXPECT_GT(shown, 200) << what;
+            else EXPECT_GT(on.stats.culled_occlusion, off.stats.culled_occlusion + deferred.size() / 2) << what;
+          }
+      }
+    }
   }
 }
 

@@ -2,6 +2,8 @@
 #include "algorithms/tiled_pass.hpp"
 
 #include <algorithm>
+#include <cstdlib>
+#include <cstring>
 
 namespace hsr::algo {
 namespace {
@@ -22,12 +24,20 @@ uint64_t TiledState::memoryBytes() const {
   return bytes;
 }
 
+bool deferBackFaces(const RenderOptions& opt) {
+  if (opt.cull != Cull::None) return false;  // culled already, or (cull front) nothing in front to draw first
+  const char* force = std::getenv("HSR_DEFER_BACK_FACES");
+  return !(force && !std::strcmp(force, "off"));
+}
+
 void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt, const DepthSetup& depth,
                  TiledState& state) {
   tiled::prepareBins(state.bins, cam.width, cam.height, (scene.triangles.size() + kChunkTriangles - 1) / kChunkTriangles);
   runFrontEnd(
       scene, cam, opt, state.fe, [&](size_t chunk) { tiled::binChunk(state.bins, chunk, state.fe.chunks[chunk], &depth); },
-      &depth);
+      &depth, deferBackFaces(opt));
+  state.bins.projected = state.fe.projected.data();  // (for the deferred back faces)
+  state.bins.camera = &cam;
 }
 
 int prepareTilePass(TiledState& state, int threads) {

@@ -25,6 +25,11 @@ struct TiledState {
   uint64_t memoryBytes() const;
 };
 
+/// Whether a frame defers its back faces (raster/tiled.hpp, binChunk): when it draws both sides
+/// (cull none). The environment variable HSR_DEFER_BACK_FACES=off turns it off, for tests and
+/// measurements: the image is the same bits either way.
+bool deferBackFaces(const RenderOptions& opt);
+
 /// Sets up the scene's triangles (runFrontEnd) and bins each chunk on the worker that set it up,
 /// while it is in that core's cache.
 void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt, const DepthSetup& depth,

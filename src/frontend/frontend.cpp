@@ -190,7 +190,8 @@ uint64_t FrontEndOutput::memoryBytes() const {
   uint64_t bytes = outcodes.capacity() +
                    projected.capacity() * sizeof(ProjectedVertex) + faceVisible.capacity();
   for (const auto& c : chunks)
-    bytes += c.triangles.capacity() * sizeof(SetupTriangle) + c.nearest.capacity() * sizeof(double);
+    bytes += (c.triangles.capacity() + c.deferredRecords.capacity()) * sizeof(SetupTriangle) +
+             c.nearest.capacity() * sizeof(double) + c.deferred.capacity() * sizeof(DeferredFace);
   return bytes;
 }
 
@@ -203,15 +204,18 @@ namespace {
 // the clip volume are set up in batches with SIMD (setupBatch); a clipped one flushes the batch
 // first, so the output stays in submission order.
 void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& options, const TriangleShader& shade,
-                const FrontEndOutput& fe, const DepthSetup* depth, size_t begin, size_t end, FrontEndChunk& out) {
+                const FrontEndOutput& fe, const DepthSetup* depth, bool defer, size_t begin, size_t end,
+                FrontEndChunk& out) {
   out.triangles.clear();
   out.nearest.clear();
+  out.deferred.clear();
   FrontEndCounters& counters = out.counters;
   const bool color = options.outputs == FrameOutputs::All;
   constexpr size_t kBatch = 64;
   uint32_t batchVertex[3][kBatch], batchTriangle[kBatch], batchFace[kBatch];
   SetupTriangle batchOut[kBatch];
   double batchNearest[kBatch];
+  DeferredFace batchDeferred[kBatch];
   size_t batched = 0;
   auto keep = [&](SetupTriangle& t, double nearest) {  // front faces shaded (see triangleColor)
     t.color = color && t.frontFacing ? shade(t.triangle) : Rgba8{};
@@ -222,9 +226,11 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
   };
   auto flush = [&] {
     const uint32_t* vertex[3] = {batchVertex[0], batchVertex[1], batchVertex[2]};
+    size_t deferred = 0;
     const size_t n = setupBatch(fe.projected.data(), vertex, batchTriangle, batchFace, batched, cam, options.cull,
-                                counters, batchOut, depth, batchNearest);
+                                counters, batchOut, depth, batchNearest, defer ? batchDeferred : nullptr, &deferred);
     for (size_t i = 0; i < n; ++i) keep(batchOut[i], batchNearest[i]);
+    out.deferred.insert(out.deferred.end(), batchDeferred, batchDeferred + deferred);
     batched = 0;
   };
   HVertex poly[3 + kPlanes], scratch[3 + kPlanes];
@@ -264,7 +270,7 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
 }  // namespace
 
 void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& options, FrontEndOutput& out,
-                 const ChunkConsumer& consumer, const DepthSetup* nearestFor) {
+                 const ChunkConsumer& consumer, const DepthSetup* nearestFor, bool deferBackFaces) {
   static_cast<FrontEndCounters&>(out) = FrontEndCounters{};
   const int threads = resolveThreads(options.threads);
 
@@ -307,8 +313,8 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
   parallelFor(0, out.chunkCount, threads, [&](size_t c) {
     FrontEndChunk& chunk = out.chunks[c];
     chunk.counters = FrontEndCounters{};
-    setupRange(scene, cam, options, shade, out, nearestFor, c * kChunkTriangles, std::min(nt, (c + 1) * kChunkTriangles),
-               chunk);
+    setupRange(scene, cam, options, shade, out, nearestFor, deferBackFaces && nearestFor, c * kChunkTriangles,
+               std::min(nt, (c + 1) * kChunkTriangles), chunk);
     if (consumer) consumer(c);
   });
   for (size_t c = 0; c < out.chunkCount; ++c) out.add(out.chunks[c].counters);

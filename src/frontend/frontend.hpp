@@ -99,9 +99,29 @@ inline constexpr int kLargeBoxPixels = 64;
 /// mostly 1) stay in a core's L2 cache until they are binned.
 inline constexpr size_t kChunkTriangles = 1 << 12;
 
+/// A back face runFrontEnd(deferBackFaces = true) did not write a SetupTriangle for: what the
+/// tiled rasterizer needs to decide, from its tile's stored depths, whether it can show, and to
+/// set it up again (setupBatch, same bits) if so (raster/tiled.hpp: deferred back faces).
+/// 40 bytes instead of the record's 96.
+struct DeferredFace {
+  uint32_t v[3];                   // scene vertex indices (FrontEndOutput::projected)
+  uint32_t triangle, face;
+  int16_t minX, minY, maxX, maxY;  // the pixel box, within one tile (kDeferTile)
+  double nearest;                  // nearestStored() of its set-up triangle
+};
+
+/// Back faces are deferred only when their pixel box lies in one square of this size (the tiled
+/// rasterizer's tile), so that one worker owns everything done with them.
+inline constexpr int kDeferTile = 64;
+
 /// The set-up triangles of one chunk of scene triangles, in submission order.
 struct FrontEndChunk {
   std::vector<SetupTriangle> triangles;
+  /// With runFrontEnd's deferBackFaces: the deferred back faces (not in `triangles`), in
+  /// submission order, and room for their records when set up again (grown, never shrunk:
+  /// indexed as `deferred`, written by the tile pass).
+  std::vector<DeferredFace> deferred;
+  std::vector<SetupTriangle> deferredRecords;
   /// With runFrontEnd's `nearestFor` only, one per triangle: a stored value of that depth setup
   /// that none of the triangle's fragments is nearer than (nearestStored() in
   /// raster/fragment_depth.hpp, bit for bit), for occlusion culling.
@@ -171,16 +191,21 @@ inline constexpr size_t kSetupBatch = 8;
 /// triIndex[i] and face face[i]. Writes the survivors to out[0, n), in order, and returns n;
 /// the SetupTriangles (colour aside) and counters are bit for bit those of setupTriangle().
 /// With `depth`, also nearest[0, n): nearestStored(out[i], *depth), bit for bit.
+/// With `deferred` (and `depth`), the back faces whose pixel box lies in one kDeferTile square
+/// go to deferred[0, *deferredCount) as DeferredFaces instead (in order; not counted in n).
 size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
                   const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
-                  SetupTriangle* out, const DepthSetup* depth = nullptr, double* nearest = nullptr);
+                  SetupTriangle* out, const DepthSetup* depth = nullptr, double* nearest = nullptr,
+                  DeferredFace* deferred = nullptr, size_t* deferredCount = nullptr);
 
 /// Runs the front end over all scene triangles, in order, on up to options.threads threads; the
 /// work is split into fixed chunks, so the output never depends on the thread count.
 /// `out` is reused across frames. `consumer`, when given, is called once per chunk (see
 /// ChunkConsumer), before runFrontEnd returns. With `nearestFor`, every chunk's `nearest` holds
-/// the triangles' nearest bounds in that depth setup.
+/// the triangles' nearest bounds in that depth setup. With `deferBackFaces` too, the back faces
+/// setupBatch can defer are in the chunks' `deferred` lists, not in `triangles`.
 void runFrontEnd(const Scene& scene, const Camera& camera, const RenderOptions& options, FrontEndOutput& out,
-                 const ChunkConsumer& consumer = {}, const DepthSetup* nearestFor = nullptr);
+                 const ChunkConsumer& consumer = {}, const DepthSetup* nearestFor = nullptr,
+                 bool deferBackFaces = false);
 
 }  // namespace hsr

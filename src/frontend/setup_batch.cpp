@@ -138,11 +138,14 @@ HWY_INLINE V NearestStored(const DepthSetup& depth, const PlaneV& N, const Plane
 
 size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
                   const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
-                  SetupTriangle* out, const DepthSetup* depth, double* nearest) {
+                  SetupTriangle* out, const DepthSetup* depth, double* nearest, DeferredFace* deferred,
+                  size_t* deferredCount) {
   const D d;
   const size_t N = hn::Lanes(d);
   const hn::Rebind<int64_t, D> di;
-  size_t written = 0;
+  size_t written = 0, deferredWritten = 0;
+  if (deferredCount) *deferredCount = 0;
+  if (!depth) deferred = nullptr;  // (a deferred face needs its nearest bound)
   for (size_t first = 0; first < count; first += N) {
     const size_t lanes = std::min(N, count - first);
     // Gather each vertex's fields (ProjectedVertex: sx, sy, X, Y, num, den; 6 x 8 bytes).
@@ -278,8 +281,28 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     hn::Store(da, d, lane[13]), hn::Store(db, d, lane[14]), hn::Store(dc, d, lane[15]);
     hn::Store(nearestV, d, lane[16]);
     hn::Store(hn::VecFromMask(d, front), d, lane[17]);
-    uint8_t survivorBits[8] = {};
-    hn::StoreMaskBits(d, survivors, survivorBits);
+    // Deferred: back faces whose box lies in one kDeferTile square.
+    M defer = hn::FirstN(d, 0);
+    if (deferred) {
+      const V tile = hn::Set(d, 1.0 / kDeferTile);
+      auto sameTile = [&](V a, V b) { return hn::Eq(hn::Floor(hn::Mul(a, tile)), hn::Floor(hn::Mul(b, tile))); };
+      defer = hn::AndNot(front, hn::And(survivors, hn::And(sameTile(bx0, bx1), sameTile(by0, by1))));
+    }
+    uint8_t survivorBits[8] = {}, deferBits[8] = {};
+    hn::StoreMaskBits(d, defer, deferBits);
+    for (unsigned bits = deferBits[0]; bits; bits &= bits - 1) {
+      const size_t j = hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
+      DeferredFace& f = deferred[deferredWritten++];
+      for (int k = 0; k < 3; ++k) f.v[k] = vertex[k][first + j];
+      f.triangle = triIndex[first + j];
+      f.face = face[first + j];
+      f.minX = int16_t(lane[6][j]);
+      f.maxX = int16_t(lane[7][j]);
+      f.minY = int16_t(lane[8][j]);
+      f.maxY = int16_t(lane[9][j]);
+      f.nearest = lane[16][j];
+    }
+    hn::StoreMaskBits(d, hn::AndNot(defer, survivors), survivorBits);
     for (unsigned bits = survivorBits[0]; bits; bits &= bits - 1) {
       const size_t j = hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
       if (depth) nearest[written] = lane[16][j];
@@ -299,6 +322,7 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
       t.frontFacing = lane[17][j] != 0;
     }
   }
+  if (deferredCount) *deferredCount = deferredWritten;
   return written;
 }
 
@@ -376,9 +400,10 @@ void transformVertices(const dvec3* positions, size_t count, const dmat4& M, con
 
 size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
                   const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
-                  SetupTriangle* out, const DepthSetup* depth, double* nearest) {
+                  SetupTriangle* out, const DepthSetup* depth, double* nearest, DeferredFace* deferred,
+                  size_t* deferredCount) {
   return HWY_DYNAMIC_DISPATCH(SetupBatch)(projected, vertex, triIndex, face, count, cam, cull, counters, out, depth,
-                                          nearest);
+                                          nearest, deferred, deferredCount);
 }
 }  // namespace hsr
 #endif

@@ -295,12 +295,14 @@ void RasterizeTileT(const TileJob& job) {
   const int x0 = tf.x0, y0 = tf.y0, w = tf.w, h = tf.h;
 
   // The tile starts cleared, as one uniform state: nothing is written to its buffers until a
-  // triangle covers only part of it.
-  s.state = TileState::Clear;
-  s.resolved = false;
-  s.tileFar = tf.clear;
-  s.tileNear = tf.clear;
-  s.tileFarStale = false;
+  // triangle covers only part of it. (The late pass goes on from the front pass's tile.)
+  if (job.pass != TileJob::Pass::Late) {
+    s.state = TileState::Clear;
+    s.resolved = false;
+    s.tileFar = tf.clear;
+    s.tileNear = tf.clear;
+    s.tileFarStale = false;
+  }
 
   const double n = job.depth.near, f = job.depth.far;
   const bool ortho = job.depth.orthographic;
@@ -317,8 +319,31 @@ void RasterizeTileT(const TileJob& job) {
   unsigned sinceRefresh = 0;
   ReciprocalCache reciprocal;  // mapPlanes' division, once for the tile's triangles that share it
 
+  // The farthest values of the blocks written by the small-triangle path (dirtyBlocks), read
+  // again; and the tile's, the farthest of its blocks'.
+  auto refreshDirty = [&] {
+    for (uint64_t bits = dirtyBlocks; bits; bits &= bits - 1) {
+      const int b = hwy::Num0BitsBelowLS1Bit_Nonzero64(bits);
+      const size_t first = size_t(b / kBlocksX) * kBlockSize * kTileSize + size_t(b % kBlocksX) * kBlockSize;
+      V far = nearestV;
+      for (int y = 0; y < kBlockSize; ++y)
+        for (size_t k = 0; k < size_t(kBlockSize); k += N)
+          far = Farther<kGreater>(far, hn::Load(d, s.depth + first + size_t(y) * kTileSize + k));
+      s.blockFar[b] = FarthestLane<kGreater>(far);
+    }
+    dirtyBlocks = 0;
+    s.tileFarStale = true;
+  };
+  auto refreshTileFar = [&] {
+    V far = nearestV;
+    for (size_t b = 0; b < size_t(kBlocksPerTile); b += N) far = Farther<kGreater>(far, hn::Load(d, s.blockFar + b));
+    s.tileFar = FarthestLane<kGreater>(far);
+    s.tileFarStale = false;
+  };
+
   // The tile's triangles, roughly nearest first (orderTile): any order gives the same image.
-  const std::vector<TileEntry>& order = orderTile(bins, job.tile, kGreater, *job.order);
+  const std::vector<TileEntry>& order =
+      job.pass == TileJob::Pass::Late ? job.order->late : orderTile(bins, job.tile, kGreater, *job.order);
   for (size_t item = 0, end = order.size(); item < end; ++item) {
     const SetupTriangle& t = bins.triangle(order[item].key);
     // The records are scattered over the chunks: fetch ahead those of triangles the tile's
@@ -336,25 +361,8 @@ void RasterizeTileT(const TileJob& job) {
     const double qNear = order[item].nearest;
     // Blocks small triangles wrote to: their farthest values, again, every 16 triangles (a
     // stale value is still a valid bound: writes only bring stored values nearer).
-    if (dirtyBlocks && (++sinceRefresh & 15) == 0) {
-      for (uint64_t bits = dirtyBlocks; bits; bits &= bits - 1) {
-        const int b = hwy::Num0BitsBelowLS1Bit_Nonzero64(bits);
-        const size_t first = size_t(b / kBlocksX) * kBlockSize * kTileSize + size_t(b % kBlocksX) * kBlockSize;
-        V far = nearestV;
-        for (int y = 0; y < kBlockSize; ++y)
-          for (size_t k = 0; k < size_t(kBlockSize); k += N)
-            far = Farther<kGreater>(far, hn::Load(d, s.depth + first + size_t(y) * kTileSize + k));
-        s.blockFar[b] = FarthestLane<kGreater>(far);
-      }
-      dirtyBlocks = 0;
-      s.tileFarStale = true;
-    }
-    if (s.tileFarStale) {  // the farthest of the blocks' farthest values
-      V far = nearestV;
-      for (size_t b = 0; b < size_t(kBlocksPerTile); b += N) far = Farther<kGreater>(far, hn::Load(d, s.blockFar + b));
-      s.tileFar = FarthestLane<kGreater>(far);
-      s.tileFarStale = false;
-    }
+    if (dirtyBlocks && (++sinceRefresh & 15) == 0) refreshDirty();
+    if (s.tileFarStale) refreshTileFar();
     if (Beaten<M, kIds>(qNear, s.tileFar)) {
       ++count.culledTiles;
       continue;
@@ -566,6 +574,11 @@ void RasterizeTileT(const TileJob& job) {
           if (storedNearer<M>(written, s.tileNear)) s.tileNear = written;
         }
       }
+  }
+  if (job.pass == TileJob::Pass::Front && s.state == TileState::Pixels) {
+    // Exact block bounds for the deferred back faces' test (tiled.cpp, selectLate).
+    if (dirtyBlocks) refreshDirty();
+    if (s.tileFarStale) refreshTileFar();
   }
   count.depthTests = tests;
   count.depthWrites = writes;

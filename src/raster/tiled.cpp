@@ -30,9 +30,10 @@ HWY_EXPORT(ResolveTile);
 HWY_EXPORT(PrepareResolve);
 HWY_EXPORT(KernelTarget);
 
-size_t Bins::entries(int tile) const {
+size_t Bins::entries(int tile, bool inLate) const {
+  const std::vector<ChunkBins>& set = inLate ? late : chunks;
   size_t n = 0;
-  for (size_t c = 0; c < chunkCount; ++c) n += chunks[c].start[size_t(tile) + 1] - chunks[c].start[size_t(tile)];
+  for (size_t c = 0; c < chunkCount; ++c) n += set[c].start[size_t(tile) + 1] - set[c].start[size_t(tile)];
   return n;
 }
 
@@ -42,11 +43,19 @@ uint64_t Bins::culled() const {
   return n;
 }
 
+size_t Bins::deferred() const {
+  size_t n = 0;
+  for (size_t c = 0; c < chunkCount; ++c) n += late[c].items.size();
+  return n;
+}
+
 uint64_t Bins::memoryBytes() const {
-  uint64_t bytes = triangles.capacity() * sizeof(void*);
-  for (const ChunkBins& c : chunks)
-    bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.pairs.capacity() * sizeof(uint64_t) +
-             (c.itemNearest.capacity() + c.cover.capacity()) * sizeof(double) + sizeof(c);
+  uint64_t bytes = records.capacity() * sizeof(void*);
+  for (const std::vector<ChunkBins>* set : {&chunks, &late})
+    for (const ChunkBins& c : *set)
+      bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.pairs.capacity() * sizeof(uint64_t) +
+               (c.itemNearest.capacity() + c.cover.capacity()) * sizeof(double) +
+               (c.itemBox.capacity() + c.faceBox.capacity()) * sizeof(uint32_t) + c.records.capacity() * sizeof(SetupTriangle) + sizeof(c);
   return bytes;
 }
 
@@ -194,16 +203,44 @@ void prepareBins(Bins& bins, int width, int height, size_t chunkCount) {
   bins.tilesY = (height + kTileSize - 1) / kTileSize;
   bins.chunkCount = chunkCount;
   if (bins.chunks.size() < chunkCount) bins.chunks.resize(chunkCount);
-  bins.triangles.assign(chunkCount, nullptr);
+  if (bins.late.size() < chunkCount) bins.late.resize(chunkCount);
+  bins.records.assign(2 * chunkCount, nullptr);
+  bins.projected = nullptr;
+  bins.camera = nullptr;
 }
+
+namespace {
+
+// Sorts cb.pairs (tile << 32 | localKey) by tile into cb.start/items/itemNearest (a counting
+// sort, stable: each tile's triangles stay in submission order), with each item's nearest bound
+// nearestOf(index in the chunk's records or deferred faces).
+template <class NearestOf>
+void sortPairs(ChunkBins& cb, size_t tiles, NearestOf&& nearestOf) {
+  cb.start.assign(tiles + 1, 0);
+  for (uint64_t p : cb.pairs) ++cb.start[(p >> 32) + 1];
+  for (size_t t = 0; t < tiles; ++t) cb.start[t + 1] += cb.start[t];
+  cb.items.resize(cb.pairs.size());
+  cb.itemNearest.resize(cb.pairs.size());
+  for (uint64_t p : cb.pairs) {
+    const uint32_t at = cb.start[p >> 32]++;
+    cb.items[at] = uint32_t(p);
+    // Next to the item: the tile pass reads them in order.
+    cb.itemNearest[at] = nearestOf(localIndex(uint32_t(p)));
+  }
+  for (size_t t = tiles; t > 0; --t) cb.start[t] = cb.start[t - 1];  // back to the beginnings
+  cb.start[0] = 0;
+}
+
+}  // namespace
 
 void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const DepthSetup* cullFor) {
   ChunkBins& cb = bins.chunks[chunk];
   const std::vector<SetupTriangle>& tris = triangles.triangles;
   if (triangles.nearest.size() != tris.size())
     throw std::logic_error("binChunk: the chunk has no nearest bounds (runFrontEnd without nearestFor)");
-  bins.triangles[chunk] = tris.data();
+  bins.records[2 * chunk] = tris.data();
   const size_t n = tris.size(), tiles = size_t(bins.tileCount());
+  const uint32_t firstTriangle = uint32_t(chunk * kChunkTriangles);
   cb.pairs.clear();
   cb.culled = 0;
   bool cull = false;
@@ -215,26 +252,33 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
       cull = coverBounds<S, M>(tris, *cullFor, bins.width, bins.height, bins.tilesX, cb.cover);
     });
   }
-  if (cull)
-    for (size_t i = 0; i < n; ++i)
-      binTriangle<true>(tris[i], uint32_t(i), bins.tilesX, cb.pairs, cb.cover.data(), triangles.nearest[i], greater,
-                        &cb.culled);
-  else
-    for (size_t i = 0; i < n; ++i) binTriangle<false>(tris[i], uint32_t(i), bins.tilesX, cb.pairs);
-  // Counting sort by tile, stable: each tile's triangles stay in submission order.
-  cb.start.assign(tiles + 1, 0);
-  for (uint64_t p : cb.pairs) ++cb.start[(p >> 32) + 1];
-  for (size_t t = 0; t < tiles; ++t) cb.start[t + 1] += cb.start[t];
-  cb.items.resize(cb.pairs.size());
-  cb.itemNearest.resize(cb.pairs.size());
   const double* nearest = triangles.nearest.data();
-  for (uint64_t p : cb.pairs) {
-    const uint32_t at = cb.start[p >> 32]++;
-    cb.items[at] = uint32_t(p);
-    cb.itemNearest[at] = nearest[uint32_t(p)];  // next to the item: the tile pass reads them in order
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t local = localKey(tris[i].triangle - firstTriangle, false, uint32_t(i));
+    if (cull) binTriangle<true>(tris[i], local, bins.tilesX, cb.pairs, cb.cover.data(), nearest[i], greater, &cb.culled);
+    else binTriangle<false>(tris[i], local, bins.tilesX, cb.pairs);
   }
-  for (size_t t = tiles; t > 0; --t) cb.start[t] = cb.start[t - 1];  // back to the beginnings
-  cb.start[0] = 0;
+  sortPairs(cb, tiles, [&](uint32_t i) { return nearest[i]; });
+
+  // The deferred back faces, each in its one tile.
+  ChunkBins& late = bins.late[chunk];
+  const std::vector<DeferredFace>& faces = triangles.deferred;
+  late.pairs.clear();
+  late.culled = 0;
+  late.faces = faces.data();
+  if (late.records.size() < faces.size()) late.records.resize(faces.size());  // (grown once: not written per frame)
+  bins.records[2 * chunk + 1] = late.records.data();
+  late.faceBox.resize(faces.size());
+  for (size_t i = 0; i < faces.size(); ++i) {
+    const DeferredFace& f = faces[i];
+    const uint64_t tile = uint64_t(f.minY / kTileSize) * uint64_t(bins.tilesX) + uint64_t(f.minX / kTileSize);
+    late.pairs.push_back(tile << 32 | localKey(f.triangle - firstTriangle, true, uint32_t(i)));
+    const uint32_t x0 = uint32_t(f.minX % kTileSize), y0 = uint32_t(f.minY % kTileSize);
+    late.faceBox[i] = x0 | y0 << 8 | uint32_t(x0 + f.maxX - f.minX) << 16 | uint32_t(y0 + f.maxY - f.minY) << 24;
+  }
+  sortPairs(late, tiles, [&](uint32_t i) { return faces[i].nearest; });
+  late.itemBox.resize(late.items.size());
+  for (size_t k = 0; k < late.items.size(); ++k) late.itemBox[k] = late.faceBox[localIndex(late.items[k])];
 }
 
 uint64_t TileOrder::memoryBytes() const {
@@ -250,7 +294,7 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater
   bool finite = true;
   for (size_t c = 0; c < bins.chunkCount; ++c) {
     const ChunkBins& cb = bins.chunks[c];
-    const uint64_t chunkKey = triangleKey(c, 0);
+    const uint64_t chunkKey = triangleKey(c, 0);  // + localKey
     for (uint32_t item = cb.start[size_t(tile)], end = cb.start[size_t(tile) + 1]; item < end; ++item) {
       const double v = cb.itemNearest[item];
       *entry++ = {chunkKey + cb.items[item], v};
@@ -277,9 +321,79 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater
   return out;
 }
 
+namespace {
+
+// The deferred back faces binned to `tile` that may change it, as rasterizeTile's Front pass left
+// it in `s`: set up (their records in Bins::late) and listed in order.late. A face is hidden when
+// every block its box touches holds nothing farther than its nearest bound (Beaten, with the
+// kernel's tie rule); hidden ones are counted as culled triangle-tile pairs.
+void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, const TileScratch& s, TileOrder& order,
+                RasterCounters& counters) {
+  constexpr int kBlocksX = kTileSize / kBlockSize;
+  const bool greater = depth.format.greaterWins();
+  auto beaten = [&](double nearest, double far) {
+    return ids ? (greater ? far > nearest : far < nearest) : !(greater ? nearest > far : nearest < far);
+  };
+  const double uniformFar = s.tileFar;  // a Clear or Plane tile: its farthest value, for every block
+  order.late.clear();
+  constexpr size_t kBatch = 64;
+  uint32_t vertex[3][kBatch], tri[kBatch], face[kBatch], index[kBatch];
+  size_t batched = 0, batchChunk = 0;
+  SetupTriangle out[kBatch];
+  FrontEndCounters ignored;
+  if (!(bins.projected && bins.camera))
+    throw std::logic_error("rasterizeTile: deferred back faces, but Bins::projected and Bins::camera are not set");
+  auto flush = [&] {
+    const uint32_t* v[3] = {vertex[0], vertex[1], vertex[2]};
+    const size_t n = setupBatch(bins.projected, v, tri, face, batched, *bins.camera, Cull::None, ignored, out);
+    if (n != batched) throw std::logic_error("rasterizeTile: a deferred back face did not set up again");
+    SetupTriangle* records = bins.late[batchChunk].records.data();
+    for (size_t i = 0; i < n; ++i) records[index[i]] = out[i];  // (colour: shaded at resolve, as a back face)
+    batched = 0;
+  };
+  for (size_t c = 0; c < bins.chunkCount; ++c) {
+    const ChunkBins& cb = bins.late[c];
+    for (uint32_t item = cb.start[size_t(tile)], end = cb.start[size_t(tile) + 1]; item < end; ++item) {
+      const double nearest = cb.itemNearest[item];
+      bool hidden = true;
+      if (s.state == TileState::Pixels) {
+        const uint32_t box = cb.itemBox[item];
+        const int bx0 = int(box & 0xff) / kBlockSize, by0 = int(box >> 8 & 0xff) / kBlockSize;
+        const int bx1 = int(box >> 16 & 0xff) / kBlockSize, by1 = int(box >> 24) / kBlockSize;
+        for (int by = by0; by <= by1 && hidden; ++by)
+          for (int bx = bx0; bx <= bx1; ++bx) hidden &= beaten(nearest, s.blockFar[by * kBlocksX + bx]);
+      } else {
+        hidden = beaten(nearest, uniformFar);
+      }
+      if (hidden) {
+        ++counters.culledTiles;
+        continue;
+      }
+      const uint32_t local = cb.items[item], i = localIndex(local);
+      const DeferredFace& f = cb.faces[i];
+      if (batched && (c != batchChunk || batched == kBatch)) flush();
+      batchChunk = c;
+      for (int k = 0; k < 3; ++k) vertex[k][batched] = f.v[k];
+      tri[batched] = f.triangle;
+      face[batched] = f.face;
+      index[batched++] = i;
+      order.late.push_back({triangleKey(c, local), nearest});
+    }
+  }
+  if (batched) flush();
+}
+
+}  // namespace
+
 void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids, TileScratch& scratch,
                    TileOrder& order, RasterCounters& counters) {
-  const TileJob job{&bins, tile, depth, ids, &scratch, &counters, nullptr, &order};
+  const bool late = bins.entries(tile, true) > 0;
+  TileJob job{&bins, tile, depth, ids, &scratch, &counters, nullptr, &order, late ? TileJob::Pass::Front : TileJob::Pass::Whole};
+  HWY_DYNAMIC_DISPATCH(RasterizeTile)(job);
+  if (!late) return;
+  selectLate(bins, tile, depth, ids, scratch, order, counters);
+  if (order.late.empty()) return;
+  job.pass = TileJob::Pass::Late;
   HWY_DYNAMIC_DISPATCH(RasterizeTile)(job);
 }
 

@@ -55,36 +55,69 @@ inline constexpr int kTileSize = 64;
 inline constexpr int kBlockSize = 8;
 inline constexpr int kBlocksPerTile = (kTileSize / kBlockSize) * (kTileSize / kBlockSize);
 
+static_assert(kDeferTile == kTileSize, "a deferred back face lies in one tile");
+
 /// The bins of one front-end chunk (FrontEndChunk): its triangles grouped by tile, in
 /// submission order within a tile. Reused across frames.
 struct ChunkBins {
   std::vector<uint32_t> start;  // tileCount + 1 offsets: items[start[t], start[t + 1]) are tile t's
-  std::vector<uint32_t> items;  // indices into the chunk's triangles
+  std::vector<uint32_t> items;  // localKey of each triangle
   std::vector<double> itemNearest;  // per item: its triangle's nearest bound (FrontEndChunk::nearest)
-  std::vector<uint64_t> pairs;  // scratch of binChunk(): tile << 32 | index, in submission order
+  std::vector<uint64_t> pairs;  // scratch of binChunk(): tile << 32 | localKey, in submission order
   std::vector<double> cover;    // scratch of binChunk(): per tile, the bound of its covering triangles
   uint64_t culled = 0;          // triangle-tile pairs not binned: behind a triangle covering the tile
+  // Bins::late only: per item, the face's pixel box in its tile (x0, y0, x1, y1: a byte each,
+  // tile-local), next to the item for the tile pass's test; the chunk's deferred back faces
+  // (FrontEndChunk::deferred) and their records, written by rasterizeTile when one may show (only
+  // the worker that owns its one tile does).
+  std::vector<uint32_t> itemBox;
+  std::vector<uint32_t> faceBox;  // scratch of binChunk(): the same per face
+  const DeferredFace* faces = nullptr;
+  mutable std::vector<SetupTriangle> records;
 };
 
 /// Per-tile triangle lists of a frame: chunk by chunk, so that each chunk is binned by the worker
 /// that set it up (runFrontEnd's consumer); read in chunk order, a tile's lists are one list in
-/// submission order. A triangle is named by (chunk, index in chunk); the tile buffers store
+/// submission order. A triangle is named by (chunk, localKey); the tile buffers store
 /// `triangleKey` of the winner.
 struct Bins {
   int width = 0, height = 0, tilesX = 0, tilesY = 0;
   size_t chunkCount = 0;
-  std::vector<ChunkBins> chunks;                  // [0, chunkCount) in use
-  std::vector<const SetupTriangle*> triangles;    // per chunk: its set-up triangles
+  std::vector<ChunkBins> chunks;  // [0, chunkCount) in use
+  // [0, chunkCount) in use: each chunk's deferred back faces, in their tiles (FrontEndChunk::deferred)
+  std::vector<ChunkBins> late;
+  std::vector<const SetupTriangle*> records;  // per chunk, two: its set-up triangles, its late records
+  // For setting deferred back faces up again: runFrontEnd's vertices and camera (see binChunk).
+  const ProjectedVertex* projected = nullptr;
+  const Camera* camera = nullptr;
 
   int tileCount() const { return tilesX * tilesY; }
-  size_t entries(int tile) const;
+  size_t entries(int tile, bool inLate = false) const;  // in `chunks` (or in `late`)
   uint64_t culled() const;  // pairs binChunk left out (ChunkBins::culled), over all chunks
+  size_t deferred() const;  // deferred back faces, over all chunks
   uint64_t memoryBytes() const;
-  const SetupTriangle& triangle(uint64_t key) const { return triangles[(key - 1) >> 32][uint32_t(key - 1)]; }
+  const SetupTriangle& triangle(uint64_t key) const;
 };
 
-/// Names triangle `index` of chunk `chunk` in a tile buffer (0 = nothing drawn).
-inline uint64_t triangleKey(size_t chunk, uint32_t index) { return (uint64_t(chunk) << 32 | index) + 1; }
+/// A triangle's name within its chunk, in 28 bits that order it as submitted: its scene
+/// triangle's index in the chunk (12 bits), whether it is a deferred back face (1 bit: its
+/// record is then in Bins::late), and its index among the chunk's records or deferred faces
+/// (15 bits: the pieces of a clipped triangle, at most 7 per triangle, keep their order).
+inline constexpr int kLocalIndexBits = 15;
+static_assert(kChunkTriangles <= (1u << 12) && 7 * kChunkTriangles < (1u << kLocalIndexBits));
+inline uint32_t localKey(uint32_t triangleInChunk, bool deferred, uint32_t index) {
+  return triangleInChunk << 16 | uint32_t(deferred) << kLocalIndexBits | index;
+}
+/// The index part of a localKey: into the chunk's records, or its deferred faces.
+inline uint32_t localIndex(uint32_t local) { return local & ((1u << kLocalIndexBits) - 1); }
+/// Names a triangle of chunk `chunk` in a tile buffer (0 = nothing drawn): keys compare in
+/// submission order.
+inline uint64_t triangleKey(size_t chunk, uint32_t local) { return (uint64_t(chunk) << 28 | local) + 1; }
+inline const SetupTriangle& Bins::triangle(uint64_t key) const {
+  const uint64_t k = key - 1;
+  const uint32_t local = uint32_t(k) & ((1u << 28) - 1);
+  return records[size_t(k >> 28) * 2 + (local >> kLocalIndexBits & 1)][localIndex(local)];
+}
 
 /// Counts of the tile pass. depth_tests/writes of the statistics come from here.
 struct RasterCounters {
@@ -149,6 +182,7 @@ struct alignas(64) TileScratch {
 /// tile's list can hold every triangle of the frame).
 struct TileOrder {
   std::vector<TileEntry> entries, ordered;
+  std::vector<TileEntry> late;  // the tile's deferred back faces that may show
   std::vector<uint8_t> bucket;
   uint64_t memoryBytes() const;
 };
@@ -178,12 +212,25 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater
 /// tie anywhere in it (the image stays bit for bit; counted in ChunkBins::culled). Bounded per
 /// chunk, so the bins do not depend on the thread count. On stacked screen-filling layers this
 /// drops nearly every pair before it is sorted, ordered or visited.
+///
+/// Deferred back faces (runFrontEnd with deferBackFaces; document 000's back-face culling, made
+/// exact): on a closed mesh a back face lies behind the front faces over it, but culling it
+/// outright is not exact (silhouettes, open meshes, intersecting geometry). Those whose pixel box
+/// lies in one tile are kept out of the set-up records (FrontEndChunk::deferred, 40 bytes each)
+/// and binned to that tile in Bins::late; rasterizeTile draws the tile's other triangles first,
+/// then tests each deferred face against the farthest stored values of the blocks its box touches
+/// (the kernel's own early rejection, Beaten), sets up those that may still win or tie (setupBatch:
+/// the same bits as the front end) and draws them. The kernel's test is order-free and the keys
+/// are the submission order, so the image is the one drawing everything at once gives, bit for
+/// bit. The set-up needs Bins::projected and Bins::camera, which the caller sets after
+/// runFrontEnd (its FrontEndOutput::projected and camera, alive until the tile pass ends).
 void prepareBins(Bins& bins, int width, int height, size_t chunkCount);
 void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const DepthSetup* cullFor = nullptr);
 
 /// Rasterizes every triangle binned to `tile` into `scratch` (cleared first), visiting them in
-/// orderTile's order (lists in `order`). With ids false, only depth is kept (no triangle ids).
-/// Adds to `counters`.
+/// orderTile's order (lists in `order`), then the tile's deferred back faces that may show (see
+/// binChunk). With ids false, only depth is kept (no triangle ids). Adds to `counters` (a
+/// deferred face found hidden counts as a triangle-tile pair culled).
 void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids, TileScratch& scratch,
                    TileOrder& order, RasterCounters& counters);
 
@@ -237,6 +284,10 @@ struct TileJob {
   RasterCounters* counters;
   const TriangleShader* shader;  // resolving colour only
   TileOrder* order;              // rasterizing only
+  // Rasterizing: Whole — the binned triangles into a cleared tile; Front — the same, leaving the
+  // blocks' farthest values exact for the deferred faces' test; Late — order->late, into the
+  // tile as the Front pass left it.
+  enum class Pass : uint8_t { Whole, Front, Late } pass = Pass::Whole;
 };
 
 /// Name of the instruction set the kernel dispatches to on this machine (e.g. "AVX3").
