@@ -55,7 +55,8 @@ uint64_t Bins::memoryBytes() const {
     for (const ChunkBins& c : *set)
       bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.pairs.capacity() * sizeof(uint64_t) +
                (c.itemNearest.capacity() + c.cover.capacity()) * sizeof(double) +
-               (c.itemBox.capacity() + c.faceBox.capacity()) * sizeof(uint32_t) + c.records.capacity() * sizeof(SetupTriangle) + sizeof(c);
+               (c.itemBox.capacity() + c.faceBox.capacity()) * sizeof(uint32_t) + c.records.capacity() * sizeof(SetupTriangle) +
+               sizeof(c);
   return bytes;
 }
 
@@ -266,7 +267,7 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
   late.pairs.clear();
   late.culled = 0;
   late.faces = faces.data();
-  if (late.records.size() < faces.size()) late.records.resize(faces.size());  // (grown once: not written per frame)
+  late.records.reserve(faces.size());
   bins.records[2 * chunk + 1] = late.records.data();
   late.faceBox.resize(faces.size());
   for (size_t i = 0; i < faces.size(); ++i) {
@@ -347,8 +348,8 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
     const uint32_t* v[3] = {vertex[0], vertex[1], vertex[2]};
     const size_t n = setupBatch(bins.projected, v, tri, face, batched, *bins.camera, Cull::None, ignored, out);
     if (n != batched) throw std::logic_error("rasterizeTile: a deferred back face did not set up again");
-    SetupTriangle* records = bins.late[batchChunk].records.data();
-    for (size_t i = 0; i < n; ++i) records[index[i]] = out[i];  // (colour: shaded at resolve, as a back face)
+    const RecordRoom& records = bins.late[batchChunk].records;
+    for (size_t i = 0; i < n; ++i) records.set(index[i], out[i]);  // (colour: shaded at resolve, as a back face)
     batched = 0;
   };
   for (size_t c = 0; c < bins.chunkCount; ++c) {

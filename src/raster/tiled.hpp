@@ -33,6 +33,8 @@
 #include <hsr/render.hpp>
 
 #include <cstdint>
+#include <memory>
+#include <new>
 #include <vector>
 
 #include "core/shading.hpp"
@@ -57,6 +59,27 @@ inline constexpr int kBlocksPerTile = (kTileSize / kBlockSize) * (kTileSize / kB
 
 static_assert(kDeferTile == kTileSize, "a deferred back face lies in one tile");
 
+/// Room for set-up records that are written one by one, later, and only some of them (the
+/// deferred back faces that may show): allocated without being written, so that a first frame
+/// does not clear ~100 bytes per deferred face. Grows, never shrinks; keeps nothing when it grows.
+class RecordRoom {
+ public:
+  void reserve(size_t count) {
+    if (count <= capacity_) return;
+    bytes_.reset(new unsigned char[count * sizeof(SetupTriangle)]);  // (new[]: aligned for any scalar)
+    capacity_ = count;
+  }
+  size_t capacity() const { return capacity_; }
+  /// Writes record i (starts its lifetime); i < capacity().
+  void set(size_t i, const SetupTriangle& t) const { new (bytes_.get() + i * sizeof(SetupTriangle)) SetupTriangle(t); }
+  /// The records, of which those set() may be read.
+  const SetupTriangle* data() const { return std::launder(reinterpret_cast<const SetupTriangle*>(bytes_.get())); }
+
+ private:
+  std::unique_ptr<unsigned char[]> bytes_;
+  size_t capacity_ = 0;
+};
+
 /// The bins of one front-end chunk (FrontEndChunk): its triangles grouped by tile, in
 /// submission order within a tile. Reused across frames.
 struct ChunkBins {
@@ -73,7 +96,7 @@ struct ChunkBins {
   std::vector<uint32_t> itemBox;
   std::vector<uint32_t> faceBox;  // scratch of binChunk(): the same per face
   const DeferredFace* faces = nullptr;
-  mutable std::vector<SetupTriangle> records;
+  RecordRoom records;
 };
 
 /// Per-tile triangle lists of a frame: chunk by chunk, so that each chunk is binned by the worker
