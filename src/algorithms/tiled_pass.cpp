@@ -21,7 +21,7 @@ uint64_t TiledState::memoryBytes() const {
   uint64_t bytes = bins.memoryBytes() + scratch.size() * sizeof(tiled::TileScratch) +
                    counters.capacity() * sizeof(tiled::RasterCounters) + covered.capacity() * sizeof(uint64_t);
   for (const tiled::TileOrder& order : orders) bytes += order.memoryBytes();
-  return bytes;
+  return bytes + tileItems.capacity() * sizeof(uint32_t);
 }
 
 bool deferBackFaces(const RenderOptions& opt) {
@@ -44,10 +44,27 @@ int prepareTilePass(TiledState& state, int threads) {
   const tiled::Bins& bins = state.bins;
   // Every binned pair, chunk by chunk (not tile by tile: that is a pass over every chunk's lists
   // per tile, on one thread). The visit lists grow to the fullest tile a worker meets, once.
-  size_t work = size_t(bins.tileCount()) * kWorkPerTile;
-  for (size_t c = 0; c < bins.chunkCount; ++c) work += bins.chunks[c].items.size();
+  const size_t tiles = size_t(bins.tileCount());
+  size_t work = tiles * kWorkPerTile;
+  for (size_t c = 0; c < bins.chunkCount; ++c) work += bins.chunks[c].items.size() + bins.late[c].items.size();
   const int workers = int(std::clamp<size_t>(work / kWorkPerThread, 1, size_t(threads)));
   if (state.orders.size() < size_t(workers)) state.orders.resize(size_t(workers));
+  // Every worker's lists sized for the fullest tile (which worker meets which tile varies from
+  // frame to frame: sized by the tiles met, a warm frame could still allocate).
+  state.tileItems.assign(2 * tiles, 0);
+  for (size_t c = 0; c < bins.chunkCount; ++c)
+    for (size_t t = 0; t < tiles; ++t) {
+      state.tileItems[t] += bins.chunks[c].start[t + 1] - bins.chunks[c].start[t];
+      state.tileItems[tiles + t] += bins.late[c].start[t + 1] - bins.late[c].start[t];
+    }
+  const size_t most = *std::max_element(state.tileItems.begin(), state.tileItems.begin() + long(tiles));
+  const size_t mostLate = *std::max_element(state.tileItems.begin() + long(tiles), state.tileItems.end());
+  for (tiled::TileOrder& order : state.orders) {
+    order.entries.reserve(most);
+    order.ordered.reserve(most);
+    order.bucket.reserve(most);
+    order.late.reserve(mostLate);
+  }
   state.counters.assign(size_t(bins.tileCount()), {});
   state.covered.assign(size_t(bins.tileCount()), 0);
   return workers;

@@ -283,7 +283,7 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
 }
 
 uint64_t TileOrder::memoryBytes() const {
-  return (entries.capacity() + ordered.capacity()) * sizeof(TileEntry) + bucket.capacity();
+  return (entries.capacity() + ordered.capacity() + late.capacity()) * sizeof(TileEntry) + bucket.capacity();
 }
 
 const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater, TileOrder& order) {
