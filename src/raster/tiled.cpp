@@ -55,7 +55,7 @@ uint64_t Bins::memoryBytes() const {
     for (const ChunkBins& c : *set)
       bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.pairs.capacity() * sizeof(uint64_t) +
                (c.itemNearest.capacity() + c.cover.capacity()) * sizeof(double) +
-               (c.itemBox.capacity() + c.faceBox.capacity()) * sizeof(uint32_t) + c.records.capacity() * sizeof(SetupTriangle) +
+               c.itemBox.capacity() * sizeof(uint32_t) + c.records.capacity() * sizeof(SetupTriangle) +
                sizeof(c);
   return bytes;
 }
@@ -261,25 +261,37 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
   }
   sortPairs(cb, tiles, [&](uint32_t i) { return nearest[i]; });
 
-  // The deferred back faces, each in its one tile.
+  // The deferred back faces, each in its one tile: a counting sort by tile (stable), straight
+  // from the faces.
   ChunkBins& late = bins.late[chunk];
   const std::vector<DeferredFace>& faces = triangles.deferred;
-  late.pairs.clear();
+  const size_t m = faces.size();
   late.culled = 0;
   late.faces = faces.data();
-  late.records.reserve(faces.size());
+  late.records.reserve(m);
   bins.records[2 * chunk + 1] = late.records.data();
-  late.faceBox.resize(faces.size());
-  for (size_t i = 0; i < faces.size(); ++i) {
+  late.pairs.resize(m);  // per face: its tile
+  late.start.assign(tiles + 1, 0);
+  for (size_t i = 0; i < m; ++i) {
     const DeferredFace& f = faces[i];
-    const uint64_t tile = uint64_t(f.minY / kTileSize) * uint64_t(bins.tilesX) + uint64_t(f.minX / kTileSize);
-    late.pairs.push_back(tile << 32 | localKey(f.triangle - firstTriangle, true, uint32_t(i)));
-    const uint32_t x0 = uint32_t(f.minX % kTileSize), y0 = uint32_t(f.minY % kTileSize);
-    late.faceBox[i] = x0 | y0 << 8 | uint32_t(x0 + f.maxX - f.minX) << 16 | uint32_t(y0 + f.maxY - f.minY) << 24;
+    const uint32_t tile = uint32_t(f.minY / kTileSize) * uint32_t(bins.tilesX) + uint32_t(f.minX / kTileSize);
+    late.pairs[i] = tile;
+    ++late.start[tile + 1];
   }
-  sortPairs(late, tiles, [&](uint32_t i) { return faces[i].nearest; });
-  late.itemBox.resize(late.items.size());
-  for (size_t k = 0; k < late.items.size(); ++k) late.itemBox[k] = late.faceBox[localIndex(late.items[k])];
+  for (size_t t = 0; t < tiles; ++t) late.start[t + 1] += late.start[t];
+  late.items.resize(m);
+  late.itemNearest.resize(m);
+  late.itemBox.resize(m);
+  for (size_t i = 0; i < m; ++i) {
+    const DeferredFace& f = faces[i];
+    const uint32_t at = late.start[late.pairs[i]]++;
+    late.items[at] = localKey(f.triangle - firstTriangle, true, uint32_t(i));
+    late.itemNearest[at] = f.nearest;
+    const uint32_t x0 = uint32_t(f.minX % kTileSize), y0 = uint32_t(f.minY % kTileSize);
+    late.itemBox[at] = x0 | y0 << 8 | uint32_t(x0 + f.maxX - f.minX) << 16 | uint32_t(y0 + f.maxY - f.minY) << 24;
+  }
+  for (size_t t = tiles; t > 0; --t) late.start[t] = late.start[t - 1];  // back to the beginnings
+  late.start[0] = 0;
 }
 
 uint64_t TileOrder::memoryBytes() const {

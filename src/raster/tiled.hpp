@@ -87,6 +87,7 @@ struct ChunkBins {
   std::vector<uint32_t> items;  // localKey of each triangle
   std::vector<double> itemNearest;  // per item: its triangle's nearest bound (FrontEndChunk::nearest)
   std::vector<uint64_t> pairs;  // scratch of binChunk(): tile << 32 | localKey, in submission order
+                                // (Bins::late: each deferred face's tile)
   std::vector<double> cover;    // scratch of binChunk(): per tile, the bound of its covering triangles
   uint64_t culled = 0;          // triangle-tile pairs not binned: behind a triangle covering the tile
   // Bins::late only: per item, the face's pixel box in its tile (x0, y0, x1, y1: a byte each,
@@ -94,7 +95,6 @@ struct ChunkBins {
   // (FrontEndChunk::deferred) and their records, written by rasterizeTile when one may show (only
   // the worker that owns its one tile does).
   std::vector<uint32_t> itemBox;
-  std::vector<uint32_t> faceBox;  // scratch of binChunk(): the same per face
   const DeferredFace* faces = nullptr;
   RecordRoom records;
 };
