@@ -42,8 +42,8 @@ void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt
 
 int prepareTilePass(TiledState& state, int threads) {
   const tiled::Bins& bins = state.bins;
-  // Every binned pair, chunk by chunk (not tile by tile: that is a pass over every chunk's lists
-  // per tile, on one thread). The visit lists grow to the fullest tile a worker meets, once.
+  // Every binned pair and deferred face, chunk by chunk (not tile by tile: that is a pass over
+  // every chunk's lists per tile, on one thread).
   const size_t tiles = size_t(bins.tileCount());
   size_t work = tiles * kWorkPerTile;
   for (size_t c = 0; c < bins.chunkCount; ++c) work += bins.chunks[c].items.size() + bins.late[c].items.size();

@@ -190,8 +190,8 @@ uint64_t FrontEndOutput::memoryBytes() const {
   uint64_t bytes = outcodes.capacity() +
                    projected.capacity() * sizeof(ProjectedVertex) + faceVisible.capacity();
   for (const auto& c : chunks)
-    bytes += (c.triangles.capacity() + c.deferredRecords.capacity()) * sizeof(SetupTriangle) +
-             c.nearest.capacity() * sizeof(double) + c.deferred.capacity() * sizeof(DeferredFace);
+    bytes += c.triangles.capacity() * sizeof(SetupTriangle) + c.nearest.capacity() * sizeof(double) +
+             c.deferred.capacity() * sizeof(DeferredFace);
   return bytes;
 }
 

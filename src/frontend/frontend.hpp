@@ -118,10 +118,8 @@ inline constexpr int kDeferTile = 64;
 struct FrontEndChunk {
   std::vector<SetupTriangle> triangles;
   /// With runFrontEnd's deferBackFaces: the deferred back faces (not in `triangles`), in
-  /// submission order, and room for their records when set up again (grown, never shrunk:
-  /// indexed as `deferred`, written by the tile pass).
+  /// submission order (the records of those set up again are the tiled rasterizer's: Bins::late).
   std::vector<DeferredFace> deferred;
-  std::vector<SetupTriangle> deferredRecords;
   /// With runFrontEnd's `nearestFor` only, one per triangle: a stored value of that depth setup
   /// that none of the triangle's fragments is nearer than (nearestStored() in
   /// raster/fragment_depth.hpp, bit for bit), for occlusion culling.

@@ -43,12 +43,6 @@ uint64_t Bins::culled() const {
   return n;
 }
 
-size_t Bins::deferred() const {
-  size_t n = 0;
-  for (size_t c = 0; c < chunkCount; ++c) n += late[c].items.size();
-  return n;
-}
-
 uint64_t Bins::memoryBytes() const {
   uint64_t bytes = records.capacity() * sizeof(void*);
   for (const std::vector<ChunkBins>* set : {&chunks, &late})

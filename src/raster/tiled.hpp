@@ -4,7 +4,8 @@
 // kernel (raster/tile_kernel-inl.h) into a worker's tile-sized depth and triangle buffers;
 // resolveTile() writes (rows of) that tile into the Frame. Plain functions without threads: the
 // z-buffer (algorithms/zbuffer.cpp) calls them via parallelFor, one owner per tile, so no locks;
-// per-tile counters are summed in tile order.
+// per-tile counters are summed in tile order. Back faces lying in one tile can be deferred:
+// drawn after the tile's other triangles, and only if they may still show (binChunk).
 //
 // Exactness: the kernel evaluates coverage with the same integer edge functions and depth with
 // the same double operations in the same order as the reference (raster/halfspace.hpp +
@@ -117,7 +118,6 @@ struct Bins {
   int tileCount() const { return tilesX * tilesY; }
   size_t entries(int tile, bool inLate = false) const;  // in `chunks` (or in `late`)
   uint64_t culled() const;  // pairs binChunk left out (ChunkBins::culled), over all chunks
-  size_t deferred() const;  // deferred back faces, over all chunks
   uint64_t memoryBytes() const;
   const SetupTriangle& triangle(uint64_t key) const;
 };
