@@ -18,6 +18,7 @@
 #include <random>
 #include <set>
 
+#include "raster/fragment_depth.hpp"
 #include "raster/halfspace.hpp"
 #include "raster/tiled.hpp"
 #include "temp_dir.hpp"
@@ -572,6 +573,59 @@ TEST(Tiled, DeferredBackFaceTiesGoToTheTriangleSubmittedFirst) {
 // (HSR_DEFER_BACK_FACES=off) every frame is the same bits. Random triangles show many back
 // faces (drawn late, after being set up again); a closed mesh hides nearly all of them, which
 // are then never binned to a tile list, ordered or visited (counted as culled pairs).
+// Deferred clusters (deferCluster): every triangle of one is inside the clip volume, its pixel
+// box inside the cluster's, and its own nearest bound (nearestStored, which bounds its fragments)
+// no nearer than the cluster's — for random poses, close-ups that see the sphere's far side
+// steeply, two image sizes and every depth format. And the sphere defers clusters at all.
+TEST(Tiled, DeferredClusterBoundsEveryTriangle) {
+  const Scene scene = loadScene("builtin:sphere?n=20000");
+  std::vector<CameraSpec> cameras = poses(scene, 12, 17);
+  const Bounds3 b = scene.bounds();
+  const double r = glm::length(b.hi - b.lo) * 0.5;
+  for (double d : {1.02, 1.2, 2.0, 40.0}) {  // close-ups (the near side is clipped), far away
+    CameraSpec p;
+    p.eye = b.center() + glm::normalize(dvec3(0.3, 0.4, 1)) * (r * d);
+    p.target = b.center() + dvec3(0.05 * r, 0, 0);
+    p.fovyDeg = d > 10 ? 3 : 90;
+    cameras.push_back(p);
+  }
+  size_t clusters = 0, triangles = 0;
+  for (const CameraSpec& pose : cameras)
+    for (auto [w, h] : {std::pair{256, 160}, std::pair{1920, 1080}}) {
+      const Camera cam = resolveCamera(pose, w, h, scene.bounds());
+      for (const DepthFormat& format : allFormats()) {
+        const DepthSetup depth{format, cam.near, cam.far, cam.orthographic};
+        FrontEndOutput fe;
+        runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth, true);
+        const bool greater = format.greaterWins();
+        for (size_t k = 0; k < fe.chunkCount; ++k)
+          for (const DeferredCluster& dc : fe.chunks[k].clusters) {
+            ++clusters;
+            for (size_t i = 0; i < kClusterTriangles; ++i) {
+              const uint32_t index = uint32_t(dc.cluster * kClusterTriangles + i);
+              const Triangle& t = scene.triangles[index];
+              ProjectedVertex v[3];
+              for (int j = 0; j < 3; ++j) {
+                ASSERT_EQ(fe.outcodes[t.v[j]], 0) << "cluster " << dc.cluster;
+                v[j] = fe.projected[t.v[j]];
+              }
+              SetupTriangle st;
+              FrontEndCounters counters;
+              if (!setupTriangle(v, index, t.face, cam, Cull::None, counters, st)) continue;
+              ++triangles;
+              EXPECT_TRUE(st.minX >= dc.minX && st.maxX <= dc.maxX && st.minY >= dc.minY && st.maxY <= dc.maxY)
+                  << "triangle " << index;
+              const double own = nearestStored(st, depth);
+              EXPECT_TRUE(greater ? own <= dc.nearest : own >= dc.nearest)
+                  << fmt::format("triangle {} {}: own nearest {} cluster's {}", index, format.name(), own, dc.nearest);
+            }
+          }
+      }
+    }
+  EXPECT_GT(clusters, 1000u);
+  EXPECT_GT(triangles, 30000u);
+}
+
 TEST(Tiled, DeferredBackFacesChangeNoBit) {
   struct Case {
     const char* scene;
@@ -579,7 +633,16 @@ TEST(Tiled, DeferredBackFacesChangeNoBit) {
   };
   for (const Case& c : {Case{"builtin:random?n=3000&size=0.05", true}, Case{"builtin:sphere?n=20000", false}}) {
     const Scene scene = loadScene(c.scene);
-    for (const CameraSpec& pose : poses(scene, 2, 5)) {
+    std::vector<CameraSpec> cameras = poses(scene, 2, 5);
+    if (!c.backFacesShow) {  // inside the sphere: its far side faces away, deferred, and shows
+      CameraSpec inside;
+      inside.eye = scene.bounds().center() + dvec3(0.1, 0.05, 0.2);
+      inside.target = inside.eye + dvec3(0.2, -0.3, -1);
+      inside.fovyDeg = 80;
+      cameras.push_back(inside);
+    }
+    for (const CameraSpec& pose : cameras) {
+      const bool inside = &pose == &cameras.back() && !c.backFacesShow;
       const Camera cam = resolveCamera(pose, 256, 160, scene.bounds());
       for (const char* f : {"f32:reversed", "u16:z"}) {
         const DepthFormat format = DepthFormat::parse(f);
@@ -587,16 +650,29 @@ TEST(Tiled, DeferredBackFacesChangeNoBit) {
         FrontEndOutput fe;
         runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth, true);
         std::set<int32_t> deferred;  // scene triangles
-        for (size_t k = 0; k < fe.chunkCount; ++k)
+        size_t clusters = 0;
+        for (size_t k = 0; k < fe.chunkCount; ++k) {
           for (const DeferredFace& d : fe.chunks[k].deferred) deferred.insert(int32_t(d.triangle));
+          for (const DeferredCluster& d : fe.chunks[k].clusters)
+            for (size_t i = 0; i < kClusterTriangles; ++i) deferred.insert(int32_t(d.cluster * kClusterTriangles + i));
+          clusters += fe.chunks[k].clusters.size();
+        }
         ASSERT_GT(deferred.size(), 100u) << c.scene;
+        if (!c.backFacesShow && !cam.orthographic) EXPECT_GT(clusters, 10u) << c.scene;
         for (FrameOutputs outputs : {FrameOutputs::All, FrameOutputs::DepthOnly})
           for (int threads : {1, 3}) {
             const Frame on = renderWith(scene, cam, format, RasterKind::Tiled, threads, outputs);
+            setenv("HSR_DEFER_CLUSTERS", "off", 1);
+            const Frame facesOnly = renderWith(scene, cam, format, RasterKind::Tiled, threads, outputs);
+            unsetenv("HSR_DEFER_CLUSTERS");
             setenv("HSR_DEFER_BACK_FACES", "off", 1);
             const Frame off = renderWith(scene, cam, format, RasterKind::Tiled, threads, outputs);
             unsetenv("HSR_DEFER_BACK_FACES");
             const std::string what = fmt::format("{} {} threads {}", c.scene, f, threads);
+            EXPECT_EQ(facesOnly.faceId, off.faceId) << what;
+            EXPECT_EQ(facesOnly.triangleId, off.triangleId) << what;
+            EXPECT_EQ(firstDifference(facesOnly.depth, off.depth), -1) << what;
+            EXPECT_EQ(firstDifference(facesOnly.color, off.color), -1) << what;
             EXPECT_EQ(on.faceId, off.faceId) << what;
             EXPECT_EQ(on.triangleId, off.triangleId) << what;
             EXPECT_EQ(firstDifference(on.depth, off.depth), -1) << what;
@@ -605,7 +681,7 @@ TEST(Tiled, DeferredBackFacesChangeNoBit) {
             if (outputs == FrameOutputs::DepthOnly) continue;
             const auto shown = std::count_if(on.triangleId.begin(), on.triangleId.end(),
                                              [&](int32_t t) { return deferred.count(t) > 0; });
-            if (c.backFacesShow) EXPECT_GT(shown, 200) << what;
+            if (c.backFacesShow || inside) EXPECT_GT(shown, 200) << what;
             else EXPECT_GT(on.stats.culled_occlusion, off.stats.culled_occlusion + deferred.size() / 2) << what;
           }
       }

@@ -27,6 +27,18 @@ struct MeshRange {
   Bounds3 bounds;  // of its faces' vertices; filled by Scene::finalize() (view culling per mesh)
 };
 
+/// Triangles [kClusterTriangles i, kClusterTriangles (i + 1)) of a scene (Scene::clusters), with
+/// what a renderer needs to decide about all of them at once from a camera: the tiled z-buffer
+/// defers a cluster that faces away from the eye (raster/tiled.hpp: deferred clusters) and sets
+/// its triangles up only if it may show. Filled by Scene::finalize().
+struct TriangleCluster {
+  Bounds3 bounds;        // of its triangles' vertices
+  dvec3 axis{0.0};       // unit vector: the direction of the sum of its triangles' unit normals
+  double cosCone = -1;   // every triangle's unit normal n has dot(n, axis) >= cosCone
+  bool usable = false;   // full, in one mesh, every triangle well shaped, cosCone >= 1/2
+};
+inline constexpr size_t kClusterTriangles = 64;
+
 /// What the loader or finalize() found wrong and how it was handled. Counted, never fatal:
 /// fatal problems (NaN, indices out of range, truncated files) throw InputError instead.
 struct SceneProblems {
@@ -50,6 +62,9 @@ struct Scene {
   // degenerate faces have none) and the problems found.
   std::vector<Triangle> triangles;
   SceneProblems problems;
+  // Filled by finalize(): one per kClusterTriangles triangles (the last one may be short; then it
+  // is not usable). Normals are (v1 - v0) x (v2 - v0) of the triangles' vertices.
+  std::vector<TriangleCluster> clusters;
 
   std::optional<CameraSpec> camera;  // a camera stored in the scene file, if any
 

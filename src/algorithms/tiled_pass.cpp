@@ -30,14 +30,20 @@ bool deferBackFaces(const RenderOptions& opt) {
   return !(force && !std::strcmp(force, "off"));
 }
 
+bool deferClusters() {
+  const char* force = std::getenv("HSR_DEFER_CLUSTERS");
+  return !(force && !std::strcmp(force, "off"));
+}
+
 void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt, const DepthSetup& depth,
                  TiledState& state) {
   tiled::prepareBins(state.bins, cam.width, cam.height, (scene.triangles.size() + kChunkTriangles - 1) / kChunkTriangles);
   runFrontEnd(
       scene, cam, opt, state.fe, [&](size_t chunk) { tiled::binChunk(state.bins, chunk, state.fe.chunks[chunk], &depth); },
-      &depth, deferBackFaces(opt));
-  state.bins.projected = state.fe.projected.data();  // (for the deferred back faces)
+      &depth, deferBackFaces(opt), deferClusters());
+  state.bins.projected = state.fe.projected.data();  // (for setting deferred triangles up)
   state.bins.camera = &cam;
+  state.bins.sceneTriangles = scene.triangles.data();
 }
 
 int prepareTilePass(TiledState& state, int threads) {
@@ -46,7 +52,8 @@ int prepareTilePass(TiledState& state, int threads) {
   // every chunk's lists per tile, on one thread).
   const size_t tiles = size_t(bins.tileCount());
   size_t work = tiles * kWorkPerTile;
-  for (size_t c = 0; c < bins.chunkCount; ++c) work += bins.chunks[c].items.size() + bins.late[c].items.size();
+  for (size_t c = 0; c < bins.chunkCount; ++c)
+    work += bins.chunks[c].items.size() + bins.late[c].items.size() + bins.clusters[c].items.size();
   const int workers = int(std::clamp<size_t>(work / kWorkPerThread, 1, size_t(threads)));
   if (state.orders.size() < size_t(workers)) state.orders.resize(size_t(workers));
   // Every worker's lists sized for the fullest tile (which worker meets which tile varies from
@@ -55,7 +62,8 @@ int prepareTilePass(TiledState& state, int threads) {
   for (size_t c = 0; c < bins.chunkCount; ++c)
     for (size_t t = 0; t < tiles; ++t) {
       state.tileItems[t] += bins.chunks[c].start[t + 1] - bins.chunks[c].start[t];
-      state.tileItems[tiles + t] += bins.late[c].start[t + 1] - bins.late[c].start[t];
+      state.tileItems[tiles + t] += bins.late[c].start[t + 1] - bins.late[c].start[t] +
+                                    (bins.clusters[c].start[t + 1] - bins.clusters[c].start[t]) * kClusterTriangles;
     }
   const size_t most = *std::max_element(state.tileItems.begin(), state.tileItems.begin() + long(tiles));
   const size_t mostLate = *std::max_element(state.tileItems.begin() + long(tiles), state.tileItems.end());

@@ -30,6 +30,9 @@ struct TiledState {
 /// (cull none). The environment variable HSR_DEFER_BACK_FACES=off turns it off, for tests and
 /// measurements: the image is the same bits either way.
 bool deferBackFaces(const RenderOptions& opt);
+/// Whether the deferral takes whole clusters that face away too (Scene::clusters, deferCluster):
+/// unless HSR_DEFER_CLUSTERS=off (same bits either way).
+bool deferClusters();
 
 /// Sets up the scene's triangles (runFrontEnd) and bins each chunk on the worker that set it up,
 /// while it is in that core's cache.

@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "core/depth_map.hpp"
 #include "core/parallel.hpp"
 #include "core/shading.hpp"
 #include "raster/edge.hpp"
@@ -173,6 +174,105 @@ bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, c
   return true;
 }
 
+ClusterView clusterView(const Camera& cam) {
+  ClusterView view;
+  const dmat4& P = cam.pixelFromCamera;  // [col][row]: hx = fx X + s Y + cx Z, hy = fy Y + cy Z, d = w = Z
+  const bool pinhole = !cam.orthographic && P[0][0] > 0 && P[1][1] > 0 && P[0][1] == 0 && P[3][0] == 0 &&
+                       P[3][1] == 0 && P[0][2] == 0 && P[1][2] == 0 && P[2][2] == 1 && P[3][2] == 0 &&
+                       P[0][3] == 0 && P[1][3] == 0 && P[2][3] == 1 && P[3][3] == 0;
+  const dmat3 R(cam.cameraFromWorld);
+  const dmat3 RtR = glm::transpose(R) * R;
+  bool rigid = true;
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) rigid &= std::abs(RtR[c][r] - (c == r ? 1.0 : 0.0)) <= 1e-6;
+  if (!pinhole || !rigid) return view;
+  view.eye = -(glm::transpose(R) * dvec3(cam.cameraFromWorld[3]));
+  const double fx = P[0][0], skew = P[1][0], fy = P[1][1];
+  view.gradient = 1 / fx + std::abs(skew) / (fx * fy) + 1 / fy;
+  view.enabled = std::isfinite(view.gradient) && std::isfinite(view.eye.x) && std::isfinite(view.eye.y) &&
+                 std::isfinite(view.eye.z);
+  return view;
+}
+
+// Why out.nearest bounds every fragment of a deferred cluster (perspective camera, so a
+// fragment's stored value is a monotone function of the plane D = 1/w at its pixel centre, the
+// same for every mapping: nearer where D is larger).
+// 1. Facing away: every point p of the cluster's bounding sphere (centre C, radius R) is seen
+//    from the eye within angle gamma (sin gamma = R / |C - eye|) of the direction of C - eye,
+//    which makes angle beta with the cone's axis, and every triangle's unit normal n lies within
+//    alpha of the axis; so the angle between n and p - eye is at most beta + gamma + alpha, and
+//    when that is below pi/2 with cosine >= kAway: |n . (p - eye)| >= kAway |p - eye|. The plane
+//    of each triangle is therefore at distance c >= kAway (|C - eye| - R) from the eye.
+// 2. On such a plane 1/z is affine in the pixel position with gradient (n . dr/du, n . dr/dv)
+//    / c, r(u, v) = K^-1 (u, v, 1): its L1 norm is at most G = gradient / c (ClusterView).
+// 3. A triangle's fragments lie in its snapped triangle, whose corners are within 1/512 pixel
+//    of the projected vertices, so in the true triangle's image grown by 1/512 in x and y; there
+//    the plane D exceeds its largest vertex value, 1 / (least z of the vertices), by at most
+//    G / 256 (twice the distance, for the vertices' own rounding). The least z over the
+//    bounding box is at a corner (z is affine in the world point); the corners' z are computed
+//    less 1e-12 of their terms' magnitudes, far above the rounding of a vertex's z.
+// 4. The rasterizer's D differs from that geometric plane by rounding only: well-shaped
+//    triangles (Scene::clusters) seen away from edge on are far from slivers, so their planes
+//    are well conditioned (a tiny one is planed through its snapped corners, where the values
+//    are its vertices' own), and its relative error is ~1e-13 where 1e-6 is allowed; the
+//    mapped, stored value gets 1e-9 of itself towards near on top, then clamp and rounding to
+//    storage are monotone. Half of kAway stands in for kAway against the rounding of step 1
+//    (and a camera rotation orthonormal to 1e-6 only).
+// tests/frontend_test.cpp checks the bound against every triangle's own nearest bound.
+bool deferCluster(const TriangleCluster& cl, const ClusterView& view, const Camera& cam, const dmat4& M,
+                  const DepthSetup& depth, DeferredCluster& out) {
+  constexpr double kAway = 0.1;
+  if (!view.enabled || !cl.usable || depth.orthographic) return false;
+  // 1. Facing away by a margin (cheapest test first: most clusters that fail, fail here).
+  const dvec3 centre = cl.bounds.center();
+  const double radius = 0.5 * glm::length(cl.bounds.hi - cl.bounds.lo) * (1 + 1e-12);
+  const dvec3 toCentre = centre - view.eye;
+  const double dist = glm::length(toCentre);
+  if (!(dist > 1.001 * radius)) return false;
+  const double cosB = glm::dot(cl.axis, toCentre) / dist;
+  if (!(cosB > 0)) return false;
+  const double sinB = std::sqrt(std::max(0.0, 1 - cosB * cosB));
+  const double sinG = radius / dist, cosG = std::sqrt(1 - sinG * sinG);
+  const double cosBG = cosB * cosG - sinB * sinG, sinBG = sinB * cosG + cosB * sinG;
+  if (!(cosBG >= 0)) return false;  // beta + gamma <= pi/2 (both are in [0, pi/2))
+  const double cosA = cl.cosCone, sinA = std::sqrt(std::max(0.0, 1 - cosA * cosA));  // alpha <= pi/3
+  if (!(cosBG * cosA - sinBG * sinA >= kAway)) return false;
+  // Inside the clip volume with room to spare; the least z; the pixel box.
+  double zMin = std::numeric_limits<double>::infinity(), x0 = zMin, y0 = zMin, x1 = -zMin, y1 = -zMin;
+  const double planeScale = 2 * kGuardBandPixels + cam.width + cam.height + 1;
+  for (int c = 0; c < 8; ++c) {
+    const dvec3 p{c & 1 ? cl.bounds.hi.x : cl.bounds.lo.x, c & 2 ? cl.bounds.hi.y : cl.bounds.lo.y,
+                  c & 4 ? cl.bounds.hi.z : cl.bounds.lo.z};
+    const HVertex h = transformVertex(p, M);
+    auto terms = [&](int r) {
+      return std::abs(M[0][r] * p.x) + std::abs(M[1][r] * p.y) + std::abs(M[2][r] * p.z) + std::abs(M[3][r]);
+    };
+    const double wTerms = terms(3);
+    const double magnitude = terms(0) + terms(1) + terms(2) + wTerms * planeScale + cam.near + cam.far;
+    for (int plane = 0; plane < kPlanes; ++plane)
+      if (!(planeDistance(h, plane, cam) > 1e-9 * magnitude)) return false;
+    zMin = std::min(zMin, h.w - 1e-12 * wTerms);
+    const double sx = h.hx / h.w, sy = h.hy / h.w;
+    x0 = std::min(x0, sx), x1 = std::max(x1, sx), y0 = std::min(y0, sy), y1 = std::max(y1, sy);
+  }
+  if (!(zMin > 0)) return false;
+  // Pixels whose centres a triangle inside may cover (a pixel of margin: snapping moves 1/512).
+  const double bx0 = std::max(0.0, std::floor(x0) - 1), bx1 = std::min(double(cam.width - 1), std::ceil(x1) + 1);
+  const double by0 = std::max(0.0, std::floor(y0) - 1), by1 = std::min(double(cam.height - 1), std::ceil(y1) + 1);
+  if (!(bx0 <= bx1 && by0 <= by1)) return false;
+  out.minX = int16_t(bx0), out.maxX = int16_t(bx1), out.minY = int16_t(by0), out.maxY = int16_t(by1);
+  // 2.-4. The largest D, as an eye depth, mapped and stored.
+  const double gradient = view.gradient / (0.5 * kAway * (dist - radius));
+  const double largestD = (1 / zMin) * (1 + 1e-6) + 2 * gradient / double(kSubpixelOne);
+  const double nearestDepth = (1 / largestD) * (1 - 1e-12);
+  visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping Map>() {
+    double v = mapDepth<Map>(nearestDepth, depth.near, depth.far, false);
+    v = depth.format.greaterWins() ? v + std::abs(v) * 1e-9 : v - std::abs(v) * 1e-9;
+    out.nearest = double(quantizeDepth<S>(std::clamp(v, 0.0, 1.0)));
+  });
+  return std::isfinite(out.nearest);
+}
+
 size_t FrontEndOutput::triangleCount() const {
   size_t n = 0;
   for (size_t c = 0; c < chunkCount; ++c) n += chunks[c].triangles.size();
@@ -191,7 +291,7 @@ uint64_t FrontEndOutput::memoryBytes() const {
                    projected.capacity() * sizeof(ProjectedVertex) + faceVisible.capacity();
   for (const auto& c : chunks)
     bytes += c.triangles.capacity() * sizeof(SetupTriangle) + c.nearest.capacity() * sizeof(double) +
-             c.deferred.capacity() * sizeof(DeferredFace);
+             c.deferred.capacity() * sizeof(DeferredFace) + c.clusters.capacity() * sizeof(DeferredCluster);
   return bytes;
 }
 
@@ -204,11 +304,12 @@ namespace {
 // the clip volume are set up in batches with SIMD (setupBatch); a clipped one flushes the batch
 // first, so the output stays in submission order.
 void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& options, const TriangleShader& shade,
-                const FrontEndOutput& fe, const DepthSetup* depth, bool defer, size_t begin, size_t end,
-                FrontEndChunk& out) {
+                const FrontEndOutput& fe, const DepthSetup* depth, bool defer, const ClusterView* clusters,
+                size_t begin, size_t end, FrontEndChunk& out) {
   out.triangles.clear();
   out.nearest.clear();
   out.deferred.clear();
+  out.clusters.clear();
   FrontEndCounters& counters = out.counters;
   const bool color = options.outputs == FrameOutputs::All;
   constexpr size_t kBatch = 64;
@@ -235,8 +336,18 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
   };
   HVertex poly[3 + kPlanes], scratch[3 + kPlanes];
   SetupTriangle st;
+  static_assert(kChunkTriangles % kClusterTriangles == 0, "a cluster lies in one chunk");
   for (size_t ti = begin; ti < end; ++ti) {
     const Triangle& tri = scene.triangles[ti];
+    if (clusters && ti % kClusterTriangles == 0 && fe.faceVisible[tri.face]) {  // (a cluster is in one mesh)
+      DeferredCluster dc;
+      if (deferCluster(scene.clusters[ti / kClusterTriangles], *clusters, cam, fe.pixelFromWorld, *depth, dc)) {
+        dc.cluster = uint32_t(ti / kClusterTriangles);
+        out.clusters.push_back(dc);
+        ti += kClusterTriangles - 1;
+        continue;
+      }
+    }
     if (!fe.faceVisible[tri.face]) {
       ++counters.culledFrustum;
       continue;
@@ -270,7 +381,7 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
 }  // namespace
 
 void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& options, FrontEndOutput& out,
-                 const ChunkConsumer& consumer, const DepthSetup* nearestFor, bool deferBackFaces) {
+                 const ChunkConsumer& consumer, const DepthSetup* nearestFor, bool deferBackFaces, bool deferClusters) {
   static_cast<FrontEndCounters&>(out) = FrontEndCounters{};
   const int threads = resolveThreads(options.threads);
 
@@ -308,12 +419,16 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
   // submission order), each handed to the consumer by the worker that set it up.
   const size_t nt = scene.triangles.size();
   const TriangleShader shade(scene, cam, options.shading);
+  const bool clusters = deferBackFaces && deferClusters && nearestFor &&
+                        scene.clusters.size() == (nt + kClusterTriangles - 1) / kClusterTriangles;
+  const ClusterView view = clusters ? clusterView(cam) : ClusterView{};
   out.chunkCount = (nt + kChunkTriangles - 1) / kChunkTriangles;
   if (out.chunks.size() < out.chunkCount) out.chunks.resize(out.chunkCount);
   parallelFor(0, out.chunkCount, threads, [&](size_t c) {
     FrontEndChunk& chunk = out.chunks[c];
     chunk.counters = FrontEndCounters{};
-    setupRange(scene, cam, options, shade, out, nearestFor, deferBackFaces && nearestFor, c * kChunkTriangles,
+    setupRange(scene, cam, options, shade, out, nearestFor, deferBackFaces && nearestFor,
+               view.enabled ? &view : nullptr, c * kChunkTriangles,
                std::min(nt, (c + 1) * kChunkTriangles), chunk);
     if (consumer) consumer(c);
   });

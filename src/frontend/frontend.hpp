@@ -110,6 +110,16 @@ struct DeferredFace {
   double nearest;                  // nearestStored() of its set-up triangle
 };
 
+/// A cluster of scene triangles (Scene::clusters) that runFrontEnd(deferBackFaces = true) did
+/// not set up: every triangle of it faces away from the eye by a margin, so it is likely hidden
+/// behind the front of its mesh; the tiled rasterizer sets it up only in the tiles where it may
+/// still show (raster/tiled.hpp: deferred clusters). 24 bytes for kClusterTriangles triangles.
+struct DeferredCluster {
+  uint32_t cluster;                // index in Scene::clusters: triangles [kClusterTriangles cluster, + kClusterTriangles)
+  int16_t minX, minY, maxX, maxY;  // a pixel box in the image holding every pixel its triangles may cover
+  double nearest;                  // a stored value of the depth setup none of their fragments is nearer than
+};
+
 /// Back faces are deferred only when their pixel box lies in one square of this size (the tiled
 /// rasterizer's tile), so that one worker owns everything done with them.
 inline constexpr int kDeferTile = 64;
@@ -120,6 +130,9 @@ struct FrontEndChunk {
   /// With runFrontEnd's deferBackFaces: the deferred back faces (not in `triangles`), in
   /// submission order (the records of those set up again are the tiled rasterizer's: Bins::late).
   std::vector<DeferredFace> deferred;
+  /// With runFrontEnd's deferBackFaces: the deferred clusters, in submission order (their
+  /// triangles are in neither `triangles` nor `deferred`).
+  std::vector<DeferredCluster> clusters;
   /// With runFrontEnd's `nearestFor` only, one per triangle: a stored value of that depth setup
   /// that none of the triangle's fragments is nearer than (nearestStored() in
   /// raster/fragment_depth.hpp, bit for bit), for occlusion culling.
@@ -201,9 +214,28 @@ size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
 /// `out` is reused across frames. `consumer`, when given, is called once per chunk (see
 /// ChunkConsumer), before runFrontEnd returns. With `nearestFor`, every chunk's `nearest` holds
 /// the triangles' nearest bounds in that depth setup. With `deferBackFaces` too, the back faces
-/// setupBatch can defer are in the chunks' `deferred` lists, not in `triangles`.
+/// setupBatch can defer are in the chunks' `deferred` lists, and the clusters that face away
+/// from the eye (deferCluster; unless `deferClusters` is false) in their `clusters` lists, not
+/// in `triangles`.
 void runFrontEnd(const Scene& scene, const Camera& camera, const RenderOptions& options, FrontEndOutput& out,
                  const ChunkConsumer& consumer = {}, const DepthSetup* nearestFor = nullptr,
-                 bool deferBackFaces = false);
+                 bool deferBackFaces = false, bool deferClusters = true);
+
+/// What deciding about clusters needs from a camera, once per frame (deferCluster).
+struct ClusterView {
+  bool enabled = false;  // a perspective camera of the kind resolveCamera makes (no cluster is deferred otherwise)
+  dvec3 eye{0.0};        // the centre of projection, in world space
+  double gradient = 0;   // 1/fx + |skew|/(fx fy) + 1/fy: see deferCluster
+};
+ClusterView clusterView(const Camera& cam);
+
+/// Whether runFrontEnd(deferBackFaces = true) defers cluster `cluster` of a scene (see
+/// DeferredCluster), and if so its box and nearest bound in `out` (out.cluster is left to the
+/// caller). Every triangle of a deferred cluster lies inside the clip volume (none is clipped)
+/// and draws only inside the box, and no fragment it draws in `depth` is nearer than
+/// out.nearest (see frontend.cpp for why). `pixelFromWorld`: cam.pixelFromCamera *
+/// cam.cameraFromWorld.
+bool deferCluster(const TriangleCluster& cluster, const ClusterView& view, const Camera& cam,
+                  const dmat4& pixelFromWorld, const DepthSetup& depth, DeferredCluster& out);
 
 }  // namespace hsr

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <thread>
 
 #include "core/depth_map.hpp"
 #include "raster/fragment_depth.hpp"
@@ -31,9 +32,10 @@ HWY_EXPORT(PrepareResolve);
 HWY_EXPORT(KernelTarget);
 
 size_t Bins::entries(int tile, bool inLate) const {
-  const std::vector<ChunkBins>& set = inLate ? late : chunks;
   size_t n = 0;
-  for (size_t c = 0; c < chunkCount; ++c) n += set[c].start[size_t(tile) + 1] - set[c].start[size_t(tile)];
+  for (const std::vector<ChunkBins>* set : {inLate ? &late : &chunks, inLate ? &clusters : nullptr})
+    if (set)
+      for (size_t c = 0; c < chunkCount; ++c) n += (*set)[c].start[size_t(tile) + 1] - (*set)[c].start[size_t(tile)];
   return n;
 }
 
@@ -45,12 +47,12 @@ uint64_t Bins::culled() const {
 
 uint64_t Bins::memoryBytes() const {
   uint64_t bytes = records.capacity() * sizeof(void*);
-  for (const std::vector<ChunkBins>* set : {&chunks, &late})
+  for (const std::vector<ChunkBins>* set : {&chunks, &late, &clusters})
     for (const ChunkBins& c : *set)
       bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.pairs.capacity() * sizeof(uint64_t) +
-               (c.itemNearest.capacity() + c.cover.capacity()) * sizeof(double) +
+               (c.itemNearest.capacity() + c.cover.capacity() + c.slotNearest.capacity()) * sizeof(double) +
                c.itemBox.capacity() * sizeof(uint32_t) + c.records.capacity() * sizeof(SetupTriangle) +
-               sizeof(c);
+               c.setUpCapacity + c.survivors.capacity() + sizeof(c);
   return bytes;
 }
 
@@ -199,9 +201,11 @@ void prepareBins(Bins& bins, int width, int height, size_t chunkCount) {
   bins.chunkCount = chunkCount;
   if (bins.chunks.size() < chunkCount) bins.chunks.resize(chunkCount);
   if (bins.late.size() < chunkCount) bins.late.resize(chunkCount);
+  if (bins.clusters.size() < chunkCount) bins.clusters.resize(chunkCount);
   bins.records.assign(2 * chunkCount, nullptr);
   bins.projected = nullptr;
   bins.camera = nullptr;
+  bins.sceneTriangles = nullptr;
 }
 
 namespace {
@@ -262,7 +266,8 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
   const size_t m = faces.size();
   late.culled = 0;
   late.faces = faces.data();
-  late.records.reserve(m);
+  const std::vector<DeferredCluster>& clusters = triangles.clusters;
+  late.records.reserve(m + clusters.size() * kClusterTriangles);  // (slots for the clusters' triangles)
   bins.records[2 * chunk + 1] = late.records.data();
   late.pairs.resize(m);  // per face: its tile
   late.start.assign(tiles + 1, 0);
@@ -286,6 +291,37 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
   }
   for (size_t t = tiles; t > 0; --t) late.start[t] = late.start[t - 1];  // back to the beginnings
   late.start[0] = 0;
+
+  // The deferred clusters, in every tile their box overlaps (a counting sort by tile, stable).
+  ChunkBins& cl = bins.clusters[chunk];
+  const size_t k = clusters.size();
+  cl.clusterList = clusters.data();
+  cl.firstSlot = uint32_t(m);
+  if (cl.setUpCapacity < k) {
+    cl.setUp.reset(new std::atomic<uint8_t>[k]);
+    cl.setUpCapacity = k;
+  }
+  for (size_t i = 0; i < k; ++i) cl.setUp[i].store(0, std::memory_order_relaxed);
+  cl.survivors.assign(k, 0);
+  cl.slotNearest.resize(m + k * kClusterTriangles);
+  cl.pairs.clear();
+  for (size_t i = 0; i < k; ++i) {
+    const DeferredCluster& d = clusters[i];
+    for (int ty = d.minY / kTileSize; ty <= d.maxY / kTileSize; ++ty)
+      for (int tx = d.minX / kTileSize; tx <= d.maxX / kTileSize; ++tx)
+        cl.pairs.push_back(uint64_t(ty * bins.tilesX + tx) << 32 | i);
+  }
+  sortPairs(cl, tiles, [&](uint32_t i) { return clusters[i].nearest; });
+  cl.itemBox.resize(cl.items.size());
+  for (size_t t = 0; t < tiles; ++t) {
+    const int tx0 = int(t % size_t(bins.tilesX)) * kTileSize, ty0 = int(t / size_t(bins.tilesX)) * kTileSize;
+    for (uint32_t item = cl.start[t]; item < cl.start[t + 1]; ++item) {
+      const DeferredCluster& d = clusters[cl.items[item]];
+      const uint32_t x0 = uint32_t(std::max(d.minX - tx0, 0)), y0 = uint32_t(std::max(d.minY - ty0, 0));
+      const uint32_t x1 = uint32_t(std::min(d.maxX - tx0, kTileSize - 1)), y1 = uint32_t(std::min(d.maxY - ty0, kTileSize - 1));
+      cl.itemBox[item] = x0 | y0 << 8 | x1 << 16 | y1 << 24;
+    }
+  }
 }
 
 uint64_t TileOrder::memoryBytes() const {
@@ -330,10 +366,49 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater
 
 namespace {
 
-// The deferred back faces binned to `tile` that may change it, as rasterizeTile's Front pass left
-// it in `s`: set up (their records in Bins::late) and listed in order.late. A face is hidden when
-// every block its box touches holds nothing farther than its nearest bound (Beaten, with the
-// kernel's tie rule); hidden ones are counted as culled triangle-tile pairs.
+// Sets up deferred cluster k of chunk c, once: the first worker to get here does it, a worker
+// that finds it under way waits (the set-up of kClusterTriangles triangles: microseconds). The
+// records (same bits as the front end's) go to the chunk's late RecordRoom; they carry no colour
+// (frontFacing false: the resolve shades them, triangleColor — the same colour).
+void setUpCluster(const Bins& bins, size_t c, size_t k, const DepthSetup& depth) {
+  const ChunkBins& cl = bins.clusters[c];
+  std::atomic<uint8_t>& state = cl.setUp[k];
+  uint8_t expected = 0;
+  if (state.load(std::memory_order_acquire) == 2) return;
+  if (!state.compare_exchange_strong(expected, 1, std::memory_order_acq_rel)) {
+    while (state.load(std::memory_order_acquire) != 2) std::this_thread::yield();
+    return;
+  }
+  uint32_t vertex[3][kClusterTriangles], tri[kClusterTriangles], face[kClusterTriangles];
+  const uint32_t first = cl.clusterList[k].cluster * uint32_t(kClusterTriangles);
+  for (uint32_t i = 0; i < kClusterTriangles; ++i) {
+    const Triangle& t = bins.sceneTriangles[first + i];
+    for (int v = 0; v < 3; ++v) vertex[v][i] = t.v[v];
+    tri[i] = first + i;
+    face[i] = t.face;
+  }
+  SetupTriangle out[kClusterTriangles];
+  double nearest[kClusterTriangles];
+  FrontEndCounters ignored;
+  const uint32_t* v[3] = {vertex[0], vertex[1], vertex[2]};
+  const size_t n = setupBatch(bins.projected, v, tri, face, kClusterTriangles, *bins.camera, Cull::None, ignored, out,
+                              &depth, nearest);
+  const RecordRoom& records = bins.late[c].records;
+  const uint32_t slot = cl.clusterSlot(k);
+  for (size_t i = 0; i < n; ++i) {
+    out[i].frontFacing = false;
+    records.set(slot + i, out[i]);
+    cl.slotNearest[slot + i] = nearest[i];
+  }
+  cl.survivors[k] = uint8_t(n);
+  state.store(2, std::memory_order_release);
+}
+
+// The deferred back faces and clusters binned to `tile` that may change it, as rasterizeTile's
+// Front pass left it in `s`: set up (their records in Bins::late) and listed in order.late. A face
+// or a cluster is hidden when every block its box touches holds nothing farther than its nearest
+// bound (Beaten, with the kernel's tie rule); so is each triangle of a cluster that is not;
+// hidden ones are counted as culled triangle-tile pairs (a hidden cluster as all its triangles).
 void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, const TileScratch& s, TileOrder& order,
                 RasterCounters& counters) {
   constexpr int kBlocksX = kTileSize / kBlockSize;
@@ -342,14 +417,25 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
     return ids ? (greater ? far > nearest : far < nearest) : !(greater ? nearest > far : nearest < far);
   };
   const double uniformFar = s.tileFar;  // a Clear or Plane tile: its farthest value, for every block
+  // Whether nothing nearer than `nearest` can show in the tile-local box [x0, x1] x [y0, y1].
+  auto hidden = [&](double nearest, int x0, int y0, int x1, int y1) {
+    if (s.state != TileState::Pixels) return beaten(nearest, uniformFar);
+    for (int by = y0 / kBlockSize; by <= y1 / kBlockSize; ++by)
+      for (int bx = x0 / kBlockSize; bx <= x1 / kBlockSize; ++bx)
+        if (!beaten(nearest, s.blockFar[by * kBlocksX + bx])) return false;
+    return true;
+  };
+  auto boxHidden = [&](double nearest, uint32_t box) {
+    return hidden(nearest, int(box & 0xff), int(box >> 8 & 0xff), int(box >> 16 & 0xff), int(box >> 24));
+  };
   order.late.clear();
   constexpr size_t kBatch = 64;
   uint32_t vertex[3][kBatch], tri[kBatch], face[kBatch], index[kBatch];
   size_t batched = 0, batchChunk = 0;
   SetupTriangle out[kBatch];
   FrontEndCounters ignored;
-  if (!(bins.projected && bins.camera))
-    throw std::logic_error("rasterizeTile: deferred back faces, but Bins::projected and Bins::camera are not set");
+  if (!(bins.projected && bins.camera && bins.sceneTriangles))
+    throw std::logic_error("rasterizeTile: deferred triangles, but Bins::projected, camera or sceneTriangles is not set");
   auto flush = [&] {
     const uint32_t* v[3] = {vertex[0], vertex[1], vertex[2]};
     const size_t n = setupBatch(bins.projected, v, tri, face, batched, *bins.camera, Cull::None, ignored, out);
@@ -362,17 +448,7 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
     const ChunkBins& cb = bins.late[c];
     for (uint32_t item = cb.start[size_t(tile)], end = cb.start[size_t(tile) + 1]; item < end; ++item) {
       const double nearest = cb.itemNearest[item];
-      bool hidden = true;
-      if (s.state == TileState::Pixels) {
-        const uint32_t box = cb.itemBox[item];
-        const int bx0 = int(box & 0xff) / kBlockSize, by0 = int(box >> 8 & 0xff) / kBlockSize;
-        const int bx1 = int(box >> 16 & 0xff) / kBlockSize, by1 = int(box >> 24) / kBlockSize;
-        for (int by = by0; by <= by1 && hidden; ++by)
-          for (int bx = bx0; bx <= bx1; ++bx) hidden &= beaten(nearest, s.blockFar[by * kBlocksX + bx]);
-      } else {
-        hidden = beaten(nearest, uniformFar);
-      }
-      if (hidden) {
+      if (boxHidden(nearest, cb.itemBox[item])) {
         ++counters.culledTiles;
         continue;
       }
@@ -388,6 +464,31 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
     }
   }
   if (batched) flush();
+  const int tx0 = (tile % bins.tilesX) * kTileSize, ty0 = (tile / bins.tilesX) * kTileSize;
+  for (size_t c = 0; c < bins.chunkCount; ++c) {
+    const ChunkBins& cl = bins.clusters[c];
+    const uint32_t firstTriangle = uint32_t(c * kChunkTriangles);
+    for (uint32_t item = cl.start[size_t(tile)], end = cl.start[size_t(tile) + 1]; item < end; ++item) {
+      if (boxHidden(cl.itemNearest[item], cl.itemBox[item])) {
+        counters.culledTiles += kClusterTriangles;
+        continue;
+      }
+      const size_t k = cl.items[item];
+      setUpCluster(bins, c, k, depth);
+      const SetupTriangle* records = bins.late[c].records.data();
+      for (uint32_t slot = cl.clusterSlot(k), last = slot + cl.survivors[k]; slot < last; ++slot) {
+        const SetupTriangle& t = records[slot];
+        const int x0 = std::max(t.minX - tx0, 0), x1 = std::min(t.maxX - tx0, kTileSize - 1);
+        const int y0 = std::max(t.minY - ty0, 0), y1 = std::min(t.maxY - ty0, kTileSize - 1);
+        if (x0 > x1 || y0 > y1) continue;  // (not in this tile)
+        if (hidden(cl.slotNearest[slot], x0, y0, x1, y1)) {
+          ++counters.culledTiles;
+          continue;
+        }
+        order.late.push_back({triangleKey(c, localKey(t.triangle - firstTriangle, true, slot)), cl.slotNearest[slot]});
+      }
+    }
+  }
 }
 
 }  // namespace

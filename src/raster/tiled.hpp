@@ -33,6 +33,7 @@
 #include <hsr/frame.hpp>
 #include <hsr/render.hpp>
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <new>
@@ -98,6 +99,18 @@ struct ChunkBins {
   std::vector<uint32_t> itemBox;
   const DeferredFace* faces = nullptr;
   RecordRoom records;
+  // Bins::clusters only: the chunk's deferred clusters (FrontEndChunk::clusters; items name
+  // them by index, itemBox is the box's part in the tile). A cluster is set up once, by the
+  // first tile pass worker that finds it may show in its tile (setUp: 0 not yet, 1 under way,
+  // 2 done): its surviving triangles' records go to Bins::late's RecordRoom, slots
+  // clusterSlot(k) on, with their nearest bounds in slotNearest, and their number in survivors.
+  const DeferredCluster* clusterList = nullptr;
+  uint32_t firstSlot = 0;  // the chunk's deferred faces come first in the RecordRoom
+  std::unique_ptr<std::atomic<uint8_t>[]> setUp;
+  size_t setUpCapacity = 0;
+  mutable std::vector<uint8_t> survivors;  // (written by the worker that sets the cluster up)
+  mutable std::vector<double> slotNearest;
+  uint32_t clusterSlot(size_t k) const { return firstSlot + uint32_t(k * kClusterTriangles); }
 };
 
 /// Per-tile triangle lists of a frame: chunk by chunk, so that each chunk is binned by the worker
@@ -110,13 +123,16 @@ struct Bins {
   std::vector<ChunkBins> chunks;  // [0, chunkCount) in use
   // [0, chunkCount) in use: each chunk's deferred back faces, in their tiles (FrontEndChunk::deferred)
   std::vector<ChunkBins> late;
+  // [0, chunkCount) in use: each chunk's deferred clusters, in every tile their box overlaps
+  std::vector<ChunkBins> clusters;
   std::vector<const SetupTriangle*> records;  // per chunk, two: its set-up triangles, its late records
   // For setting deferred back faces up again: runFrontEnd's vertices and camera (see binChunk).
   const ProjectedVertex* projected = nullptr;
   const Camera* camera = nullptr;
+  const Triangle* sceneTriangles = nullptr;  // (for the deferred clusters' vertices)
 
   int tileCount() const { return tilesX * tilesY; }
-  size_t entries(int tile, bool inLate = false) const;  // in `chunks` (or in `late`)
+  size_t entries(int tile, bool inLate = false) const;  // in `chunks` (or in `late` and `clusters`)
   uint64_t culled() const;  // pairs binChunk left out (ChunkBins::culled), over all chunks
   uint64_t memoryBytes() const;
   const SetupTriangle& triangle(uint64_t key) const;
@@ -128,6 +144,7 @@ struct Bins {
 /// (15 bits: the pieces of a clipped triangle, at most 7 per triangle, keep their order).
 inline constexpr int kLocalIndexBits = 15;
 static_assert(kChunkTriangles <= (1u << 12) && 7 * kChunkTriangles < (1u << kLocalIndexBits));
+static_assert(2 * kChunkTriangles <= (1u << kLocalIndexBits), "a chunk's deferred faces and clusters' slots");
 inline uint32_t localKey(uint32_t triangleInChunk, bool deferred, uint32_t index) {
   return triangleInChunk << 16 | uint32_t(deferred) << kLocalIndexBits | index;
 }

@@ -30,6 +30,43 @@ void noteProblem(SceneProblems& problems, uint64_t count, MakeText&& text) {
   if (count <= kMaxNotesPerKind) problems.notes.push_back(text());
 }
 
+// Scene::clusters (see TriangleCluster).
+void buildClusters(Scene& scene) {
+  // A triangle is well shaped when twice its area is at least 1/50 of its longest edge squared
+  // (its least height at least 1/50 of that edge): its normal is then accurate to a few ulps, and
+  // its image under a camera that does not see it edge on is no sliver.
+  constexpr double kMinShape = 0.02;
+  std::vector<uint32_t> meshOfFace(scene.faceCount());
+  for (size_t m = 0; m < scene.meshes.size(); ++m)
+    std::fill(meshOfFace.begin() + scene.meshes[m].firstFace, meshOfFace.begin() + scene.meshes[m].firstFace + scene.meshes[m].faceCount,
+              uint32_t(m));
+  scene.clusters.assign((scene.triangles.size() + kClusterTriangles - 1) / kClusterTriangles, TriangleCluster{});
+  for (size_t c = 0; c < scene.clusters.size(); ++c) {
+    TriangleCluster& cl = scene.clusters[c];
+    const size_t first = c * kClusterTriangles, end = std::min(scene.triangles.size(), first + kClusterTriangles);
+    dvec3 normals[kClusterTriangles];
+    dvec3 sum{0.0};
+    bool usable = end - first == kClusterTriangles &&
+                  meshOfFace[scene.triangles[first].face] == meshOfFace[scene.triangles[end - 1].face];
+    for (size_t t = first; t < end; ++t) {
+      const dvec3 &a = scene.positions[scene.triangles[t].v[0]], &b = scene.positions[scene.triangles[t].v[1]], &p = scene.positions[scene.triangles[t].v[2]];
+      cl.bounds.add(a), cl.bounds.add(b), cl.bounds.add(p);
+      const dvec3 n = glm::cross(b - a, p - a);
+      const double len = glm::length(n);
+      const double edge = std::max({glm::dot(b - a, b - a), glm::dot(p - b, p - b), glm::dot(a - p, a - p)});
+      if (!(len >= kMinShape * edge) || !(len > 0) || !std::isfinite(len)) usable = false;
+      normals[t - first] = usable ? n / len : dvec3{0.0};
+      sum += normals[t - first];
+    }
+    const double sumLen = glm::length(sum);
+    if (!usable || !(sumLen > 0)) continue;
+    cl.axis = sum / sumLen;
+    cl.cosCone = 1;
+    for (size_t t = first; t < end; ++t) cl.cosCone = std::min(cl.cosCone, glm::dot(normals[t - first], cl.axis));
+    cl.usable = cl.cosCone >= 0.5;
+  }
+}
+
 }  // namespace
 
 void Scene::addFace(std::span<const uint32_t> indices, Rgba8 color) {
@@ -117,7 +154,9 @@ void Scene::finalize() {
     for (uint32_t f = mesh.firstFace; f < mesh.firstFace + mesh.faceCount; ++f)
       for (uint32_t v : face(f)) mesh.bounds.add(positions[v]);
   }
+  buildClusters(*this);
 }
+
 
 Bounds3 Scene::bounds() const {
   Bounds3 b;
