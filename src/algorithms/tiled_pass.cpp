@@ -21,7 +21,7 @@ uint64_t TiledState::memoryBytes() const {
   uint64_t bytes = bins.memoryBytes() + scratch.size() * sizeof(tiled::TileScratch) +
                    counters.capacity() * sizeof(tiled::RasterCounters) + covered.capacity() * sizeof(uint64_t);
   for (const tiled::TileOrder& order : orders) bytes += order.memoryBytes();
-  return bytes + tileItems.capacity() * sizeof(uint32_t);
+  return bytes;
 }
 
 bool deferBackFaces(const RenderOptions& opt) {
@@ -58,15 +58,12 @@ int prepareTilePass(TiledState& state, int threads) {
   if (state.orders.size() < size_t(workers)) state.orders.resize(size_t(workers));
   // Every worker's lists sized for the fullest tile (which worker meets which tile varies from
   // frame to frame: sized by the tiles met, a warm frame could still allocate).
-  state.tileItems.assign(2 * tiles, 0);
-  for (size_t c = 0; c < bins.chunkCount; ++c)
-    for (size_t t = 0; t < tiles; ++t) {
-      state.tileItems[t] += bins.chunks[c].start[t + 1] - bins.chunks[c].start[t];
-      state.tileItems[tiles + t] += bins.late[c].start[t + 1] - bins.late[c].start[t] +
-                                    (bins.clusters[c].start[t + 1] - bins.clusters[c].start[t]) * kClusterTriangles;
-    }
-  const size_t most = *std::max_element(state.tileItems.begin(), state.tileItems.begin() + long(tiles));
-  const size_t mostLate = *std::max_element(state.tileItems.begin() + long(tiles), state.tileItems.end());
+  state.bins.countEntries();
+  size_t most = 0, mostLate = 0;
+  for (size_t t = 0; t < tiles; ++t) {
+    most = std::max<size_t>(most, bins.tileEntries[t]);
+    mostLate = std::max<size_t>(mostLate, bins.tileEntries[tiles + t] + bins.tileEntries[2 * tiles + t] * kClusterTriangles);
+  }
   for (tiled::TileOrder& order : state.orders) {
     order.entries.reserve(most);
     order.ordered.reserve(most);

@@ -22,7 +22,6 @@ struct TiledState {
   std::vector<tiled::TileOrder> orders;         // per worker
   std::vector<tiled::RasterCounters> counters;  // per tile
   std::vector<uint64_t> covered;                // per tile
-  std::vector<uint32_t> tileItems;              // per tile: binned, then deferred entries (prepareTilePass)
   uint64_t memoryBytes() const;
 };
 

@@ -31,7 +31,21 @@ HWY_EXPORT(ResolveTile);
 HWY_EXPORT(PrepareResolve);
 HWY_EXPORT(KernelTarget);
 
+void Bins::countEntries() {
+  const size_t tiles = size_t(tileCount());
+  tileEntries.assign(3 * tiles, 0);
+  for (size_t s = 0; s < 3; ++s) {
+    const std::vector<ChunkBins>& set = s == 0 ? chunks : s == 1 ? late : clusters;
+    for (size_t c = 0; c < chunkCount; ++c)
+      for (size_t t = 0; t < tiles; ++t) tileEntries[s * tiles + t] += set[c].start[t + 1] - set[c].start[t];
+  }
+}
+
 size_t Bins::entries(int tile, bool inLate) const {
+  if (!tileEntries.empty()) {
+    const size_t tiles = size_t(tileCount());
+    return inLate ? tileEntries[tiles + size_t(tile)] + tileEntries[2 * tiles + size_t(tile)] : tileEntries[size_t(tile)];
+  }
   size_t n = 0;
   for (const std::vector<ChunkBins>* set : {inLate ? &late : &chunks, inLate ? &clusters : nullptr})
     if (set)
@@ -46,7 +60,7 @@ uint64_t Bins::culled() const {
 }
 
 uint64_t Bins::memoryBytes() const {
-  uint64_t bytes = records.capacity() * sizeof(void*);
+  uint64_t bytes = records.capacity() * sizeof(void*) + tileEntries.capacity() * sizeof(uint32_t);
   for (const std::vector<ChunkBins>* set : {&chunks, &late, &clusters})
     for (const ChunkBins& c : *set)
       bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.pairs.capacity() * sizeof(uint64_t) +
@@ -206,6 +220,7 @@ void prepareBins(Bins& bins, int width, int height, size_t chunkCount) {
   bins.projected = nullptr;
   bins.camera = nullptr;
   bins.sceneTriangles = nullptr;
+  bins.tileEntries.clear();
 }
 
 namespace {

@@ -131,8 +131,14 @@ struct Bins {
   const Camera* camera = nullptr;
   const Triangle* sceneTriangles = nullptr;  // (for the deferred clusters' vertices)
 
+  // countEntries(): per tile, its items in chunks, late and clusters (all chunks); empty until then.
+  std::vector<uint32_t> tileEntries;
+
   int tileCount() const { return tilesX * tilesY; }
-  size_t entries(int tile, bool inLate = false) const;  // in `chunks` (or in `late` and `clusters`)
+  /// Items of `tile` in `chunks` (or in `late` and `clusters`): a sum over the chunks, or a look-up
+  /// once countEntries() has run (after the last binChunk, before the tile pass).
+  size_t entries(int tile, bool inLate = false) const;
+  void countEntries();
   uint64_t culled() const;  // pairs binChunk left out (ChunkBins::culled), over all chunks
   uint64_t memoryBytes() const;
   const SetupTriangle& triangle(uint64_t key) const;
