@@ -208,7 +208,7 @@ ClusterView clusterView(const Camera& cam) {
 // 3. A triangle's fragments lie in its snapped triangle, whose corners are within 1/512 pixel
 //    of the projected vertices, so in the true triangle's image grown by 1/512 in x and y; there
 //    the plane D exceeds its largest vertex value, 1 / (least z of the vertices), by at most
-//    G / 256 (twice the distance, for the vertices' own rounding). The least z over the
+//    G / 512; the bound allows G / 128 (room for the vertices' own rounding). The least z over the
 //    bounding box is at a corner (z is affine in the world point); the corners' z are computed
 //    less 1e-12 of their terms' magnitudes, far above the rounding of a vertex's z.
 // 4. The rasterizer's D differs from that geometric plane by rounding only: well-shaped
@@ -218,7 +218,8 @@ ClusterView clusterView(const Camera& cam) {
 //    mapped, stored value gets 1e-9 of itself towards near on top, then clamp and rounding to
 //    storage are monotone. Half of kAway stands in for kAway against the rounding of step 1
 //    (and a camera rotation orthonormal to 1e-6 only).
-// tests/frontend_test.cpp checks the bound against every triangle's own nearest bound.
+// Tiled.DeferredClusterBoundsEveryTriangle (tests/tiled_test.cpp) checks the bound against every
+// triangle's own nearest bound.
 bool deferCluster(const TriangleCluster& cl, const ClusterView& view, const Camera& cam, const dmat4& M,
                   const DepthSetup& depth, DeferredCluster& out) {
   constexpr double kAway = 0.1;
