@@ -37,9 +37,10 @@ void buildClusters(Scene& scene) {
   // its image under a camera that does not see it edge on is no sliver.
   constexpr double kMinShape = 0.02;
   std::vector<uint32_t> meshOfFace(scene.faceCount());
-  for (size_t m = 0; m < scene.meshes.size(); ++m)
-    std::fill(meshOfFace.begin() + scene.meshes[m].firstFace, meshOfFace.begin() + scene.meshes[m].firstFace + scene.meshes[m].faceCount,
-              uint32_t(m));
+  for (size_t m = 0; m < scene.meshes.size(); ++m) {
+    const auto first = meshOfFace.begin() + scene.meshes[m].firstFace;
+    std::fill(first, first + scene.meshes[m].faceCount, uint32_t(m));
+  }
   scene.clusters.assign((scene.triangles.size() + kClusterTriangles - 1) / kClusterTriangles, TriangleCluster{});
   for (size_t c = 0; c < scene.clusters.size(); ++c) {
     TriangleCluster& cl = scene.clusters[c];
@@ -49,7 +50,8 @@ void buildClusters(Scene& scene) {
     bool usable = end - first == kClusterTriangles &&
                   meshOfFace[scene.triangles[first].face] == meshOfFace[scene.triangles[end - 1].face];
     for (size_t t = first; t < end; ++t) {
-      const dvec3 &a = scene.positions[scene.triangles[t].v[0]], &b = scene.positions[scene.triangles[t].v[1]], &p = scene.positions[scene.triangles[t].v[2]];
+      const uint32_t* v = scene.triangles[t].v;
+      const dvec3 &a = scene.positions[v[0]], &b = scene.positions[v[1]], &p = scene.positions[v[2]];
       cl.bounds.add(a), cl.bounds.add(b), cl.bounds.add(p);
       const dvec3 n = glm::cross(b - a, p - a);
       const double len = glm::length(n);
