@@ -678,6 +678,13 @@ TEST(Tiled, DeferredBackFacesChangeNoBit) {
             EXPECT_EQ(firstDifference(on.depth, off.depth), -1) << what;
             EXPECT_EQ(firstDifference(on.color, off.color), -1) << what;
             EXPECT_EQ(on.stats.covered_pixels, off.stats.covered_pixels) << what;
+            // The deferral's statistics: what the front end above deferred, none with it off.
+            EXPECT_EQ(on.stats.triangles_deferred, deferred.size()) << what;
+            EXPECT_EQ(on.stats.clusters_deferred, clusters) << what;
+            EXPECT_LE(on.stats.triangles_set_up_late.value_or(0), deferred.size()) << what;
+            if (inside) EXPECT_GT(on.stats.triangles_set_up_late.value_or(0), 200u) << what;
+            EXPECT_EQ(off.stats.triangles_deferred, 0u) << what;
+            EXPECT_EQ(off.stats.triangles_set_up_late, 0u) << what;
             if (outputs == FrameOutputs::DepthOnly) continue;
             const auto shown = std::count_if(on.triangleId.begin(), on.triangleId.end(),
                                              [&](int32_t t) { return deferred.count(t) > 0; });

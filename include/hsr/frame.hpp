@@ -31,6 +31,10 @@ struct Stats {
   std::string depth_format;        // e.g. "f32:reversed" (empty for algorithms without one)
   std::vector<std::pair<std::string, double>> time_ms;  // stage -> ms, in pipeline order
   std::optional<uint64_t> wrong_pixels, ambiguous_pixels;  // with --verify
+  // The tiled rasterizer only (README, Performance: deferred back faces and clusters): triangles
+  // the front end did not set up but deferred to the tile pass, the clusters of 64 among them,
+  // and the deferred triangles the tile pass set up because they might show.
+  std::optional<uint64_t> triangles_deferred, clusters_deferred, triangles_set_up_late;
 
   double overdraw() const { return covered_pixels ? double(color_writes) / double(covered_pixels) : 0.0; }
   void addTime(const std::string& stage, double ms);

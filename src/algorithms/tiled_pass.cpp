@@ -86,6 +86,16 @@ void tiledStats(Stats& st, const FrontEndOutput& fe, const tiled::Bins* bins, co
   // Only fragments not rejected early by a tile, block or row bound are compared.
   st.depth_tests = counters.depthTests;
   st.depth_writes = counters.depthWrites;
+  if (bins) {
+    uint64_t faces = 0, clusters = 0;
+    for (size_t c = 0; c < fe.chunkCount; ++c) {
+      faces += fe.chunks[c].deferred.size();
+      clusters += fe.chunks[c].clusters.size();
+    }
+    st.triangles_deferred = faces + clusters * kClusterTriangles;
+    st.clusters_deferred = clusters;
+    st.triangles_set_up_late = counters.setUpLate;
+  }
 }
 
 }  // namespace hsr::algo

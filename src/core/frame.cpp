@@ -41,6 +41,9 @@ std::string Stats::toJson(int indent) const {
   nlohmann::ordered_json t = nlohmann::ordered_json::object();
   for (auto& [k, v] : time_ms) t[k] = v;
   j["time_ms"] = t;
+  if (triangles_deferred) j["triangles_deferred"] = *triangles_deferred;
+  if (clusters_deferred) j["clusters_deferred"] = *clusters_deferred;
+  if (triangles_set_up_late) j["triangles_set_up_late"] = *triangles_set_up_late;
   if (wrong_pixels) j["wrong_pixels"] = *wrong_pixels;
   if (ambiguous_pixels) j["ambiguous_pixels"] = *ambiguous_pixels;
   return j.dump(indent);

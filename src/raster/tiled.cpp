@@ -74,6 +74,7 @@ void RasterCounters::add(const RasterCounters& o) {
   depthTests += o.depthTests;
   depthWrites += o.depthWrites;
   culledTiles += o.culledTiles;
+  setUpLate += o.setUpLate;
   blocksEmpty += o.blocksEmpty;
   blocksPartial += o.blocksPartial;
   blocksFull += o.blocksFull;
@@ -385,7 +386,7 @@ namespace {
 // that finds it under way waits (the set-up of kClusterTriangles triangles: microseconds). The
 // records (same bits as the front end's) go to the chunk's late RecordRoom; they carry no colour
 // (frontFacing false: the resolve shades them, triangleColor — the same colour).
-void setUpCluster(const Bins& bins, size_t c, size_t k, const DepthSetup& depth) {
+void setUpCluster(const Bins& bins, size_t c, size_t k, const DepthSetup& depth, RasterCounters& counters) {
   const ChunkBins& cl = bins.clusters[c];
   std::atomic<uint8_t>& state = cl.setUp[k];
   uint8_t expected = 0;
@@ -416,6 +417,7 @@ void setUpCluster(const Bins& bins, size_t c, size_t k, const DepthSetup& depth)
     cl.slotNearest[slot + i] = nearest[i];
   }
   cl.survivors[k] = uint8_t(n);
+  counters.setUpLate += n;
   state.store(2, std::memory_order_release);
 }
 
@@ -457,6 +459,7 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
     if (n != batched) throw std::logic_error("rasterizeTile: a deferred back face did not set up again");
     const RecordRoom& records = bins.late[batchChunk].records;
     for (size_t i = 0; i < n; ++i) records.set(index[i], out[i]);  // (colour: shaded at resolve, as a back face)
+    counters.setUpLate += n;
     batched = 0;
   };
   for (size_t c = 0; c < bins.chunkCount; ++c) {
@@ -489,7 +492,7 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
         continue;
       }
       const size_t k = cl.items[item];
-      setUpCluster(bins, c, k, depth);
+      setUpCluster(bins, c, k, depth, counters);
       const SetupTriangle* records = bins.late[c].records.data();
       for (uint32_t slot = cl.clusterSlot(k), last = slot + cl.survivors[k]; slot < last; ++slot) {
         const SetupTriangle& t = records[slot];

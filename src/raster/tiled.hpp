@@ -173,6 +173,7 @@ struct RasterCounters {
   uint64_t depthTests = 0;    // fragments whose depth was computed and compared with the buffer
   uint64_t depthWrites = 0;   // fragments strictly nearer than the buffer (they win, as in the reference)
   uint64_t culledTiles = 0;   // triangle-tile pairs skipped: the triangle is behind everything stored there
+  uint64_t setUpLate = 0;     // deferred triangles set up in the tile pass (faces and clusters' survivors)
   // Blocks (8x8) met by the kernel; counted only when kCountBlocks.
   uint64_t blocksEmpty = 0, blocksPartial = 0, blocksFull = 0;
   uint64_t blocksCulled = 0;  // skipped: the triangle is behind everything stored in the block
