@@ -569,10 +569,6 @@ TEST(Tiled, DeferredBackFaceTiesGoToTheTriangleSubmittedFirst) {
   }
 }
 
-// Deferred back faces change nothing but the work: with them turned off
-// (HSR_DEFER_BACK_FACES=off) every frame is the same bits. Random triangles show many back
-// faces (drawn late, after being set up again); a closed mesh hides nearly all of them, which
-// are then never binned to a tile list, ordered or visited (counted as culled pairs).
 // Deferred clusters (deferCluster): every triangle of one is inside the clip volume, its pixel
 // box inside the cluster's, and its own nearest bound (nearestStored, which bounds its fragments)
 // no nearer than the cluster's — for random poses, close-ups that see the sphere's far side
@@ -626,6 +622,11 @@ TEST(Tiled, DeferredClusterBoundsEveryTriangle) {
   EXPECT_GT(triangles, 30000u);
 }
 
+// Deferred back faces and clusters change nothing but the work: with clusters turned off
+// (HSR_DEFER_CLUSTERS=off) or all deferral (HSR_DEFER_BACK_FACES=off) every frame is the same
+// bits. Random triangles show many back faces (drawn late, after being set up again); a closed
+// mesh hides nearly all of them, which are then never binned to a tile list, ordered or visited
+// (counted as culled pairs) — except from inside, where its far side is deferred and shows.
 TEST(Tiled, DeferredBackFacesChangeNoBit) {
   struct Case {
     const char* scene;
