@@ -1,8 +1,9 @@
 // hsr_ab_env: whole frames of one scene under two values of an environment variable that hsr
-// reads per frame (HSR_DEFER_BACK_FACES), interleaved frame by frame in one process, so that
+// reads per frame (HSR_DEFER_BACK_FACES, HSR_DEFER_CLUSTERS), interleaved frame by frame in one process, so that
 // both see the same machine: on a shared VM whose speed drifts by 20-30% within minutes, runs
 // of separate processes one after the other compare the drift as much as the code.
-//   hsr_ab_env SCENE [--size WxH] [--threads N] [--frames N] [--depth-only] [--var NAME] [--values A,B]
+//   hsr_ab_env SCENE [--size WxH] [--threads N] [--frames N] [--depth-only] [--cull-back] [--var NAME]
+//              [--values A,B]
 // Prints the median and minimum frame time of each value and the median of the per-pair ratios
 // B/A (each pair: one frame of each, in alternating order).
 #include <hsr/hsr.hpp>
@@ -19,12 +20,13 @@ int main(int argc, char** argv) {
   CLI::App app{"Interleaved A/B of an hsr environment variable, frame by frame"};
   std::string spec, size = "1920x1080", var = "HSR_DEFER_BACK_FACES", values = "off,on";
   int threads = 2, frames = 20;
-  bool depthOnly = false;
+  bool depthOnly = false, cullBack = false;
   app.add_option("scene", spec, "Scene (file or builtin:NAME)")->required();
   app.add_option("--size", size, "Image size WxH");
   app.add_option("--threads", threads, "Worker threads");
   app.add_option("--frames", frames, "Timed pairs of frames (after 2 warm-up pairs)")->check(CLI::Range(1, 100000));
   app.add_flag("--depth-only", depthOnly, "Depth only (FrameOutputs::DepthOnly)");
+  app.add_flag("--cull-back", cullBack, "Cull back faces (Cull::Back)");
   app.add_option("--var", var, "Environment variable");
   app.add_option("--values", values, "Its two values, A,B");
   CLI11_PARSE(app, argc, argv);
@@ -43,6 +45,7 @@ int main(int argc, char** argv) {
     o.threads = threads;
     o.shading = hsr::Shading::Flat;
     if (depthOnly) o.outputs = hsr::FrameOutputs::DepthOnly;
+    if (cullBack) o.cull = hsr::Cull::Back;
     hsr::Frame frame[2];
     std::vector<double> ms[2], ratio;
     for (int i = 0; i < frames + 2; ++i) {

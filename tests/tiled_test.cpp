@@ -622,6 +622,89 @@ TEST(Tiled, DeferredClusterBoundsEveryTriangle) {
   EXPECT_GT(triangles, 30000u);
 }
 
+// Culled clusters (cullCluster, with --cull back): every triangle of one is inside the clip
+// volume and culled by its own set-up as a back face — not degenerate, not empty — so culling
+// the cluster whole counts what the set-up would. Same poses as above; far away, the sphere's
+// triangles are too small for the guarantee and no cluster may be culled there unless it holds.
+TEST(Tiled, CulledClustersAreBackFacesEveryTriangle) {
+  const Scene scene = loadScene("builtin:sphere?n=20000");
+  std::vector<CameraSpec> cameras = poses(scene, 12, 17);
+  const Bounds3 b = scene.bounds();
+  const double r = glm::length(b.hi - b.lo) * 0.5;
+  for (double d : {1.02, 1.2, 2.0, 40.0, 400.0, 40000.0}) {  // (farthest: triangles of 1/1000 pixel)
+    CameraSpec p;
+    p.eye = b.center() + glm::normalize(dvec3(0.3, 0.4, 1)) * (r * d);
+    p.target = b.center() + dvec3(0.05 * r, 0, 0);
+    p.fovyDeg = d > 10 ? 3 : 90;
+    cameras.push_back(p);
+  }
+  size_t culled = 0;
+  for (const CameraSpec& pose : cameras)
+    for (auto [w, h] : {std::pair{256, 160}, std::pair{1920, 1080}}) {
+      const Camera cam = resolveCamera(pose, w, h, scene.bounds());
+      FrontEndOutput fe;
+      RenderOptions o;
+      o.cull = Cull::Back;
+      runFrontEnd(scene, cam, o, fe);  // (for the projected vertices)
+      const ClusterView view = clusterView(cam);
+      const dmat4 M = cam.pixelFromCamera * cam.cameraFromWorld;
+      for (size_t k = 0; k < scene.clusters.size(); ++k) {
+        if (!cullCluster(scene.clusters[k], view, cam, M)) continue;
+        ++culled;
+        for (size_t i = 0; i < kClusterTriangles; ++i) {
+          const uint32_t index = uint32_t(k * kClusterTriangles + i);
+          const Triangle& t = scene.triangles[index];
+          ProjectedVertex v[3];
+          for (int j = 0; j < 3; ++j) {
+            ASSERT_EQ(fe.outcodes[t.v[j]], 0) << "cluster " << k;
+            v[j] = fe.projected[t.v[j]];
+          }
+          SetupTriangle st;
+          FrontEndCounters counters;
+          EXPECT_FALSE(setupTriangle(v, index, t.face, cam, Cull::Back, counters, st)) << "triangle " << index;
+          EXPECT_EQ(counters.culledBackface, 1u) << "triangle " << index;
+        }
+      }
+    }
+  EXPECT_GT(culled, 1000u);
+}
+
+// With --cull back the culled clusters change no bit and no count: frames and statistics equal
+// with them turned off (HSR_DEFER_CLUSTERS=off), 1 and 3 threads, a camera inside the sphere too.
+TEST(Tiled, CulledClustersChangeNoBitNorCount) {
+  const Scene scene = loadScene("builtin:sphere?n=20000");
+  std::vector<CameraSpec> cameras = poses(scene, 3, 23);
+  CameraSpec inside;
+  inside.eye = scene.bounds().center() + dvec3(0.1, 0.05, 0.2);
+  inside.target = inside.eye + dvec3(0.2, -0.3, -1);
+  inside.fovyDeg = 80;
+  cameras.push_back(inside);
+  for (const CameraSpec& pose : cameras) {
+    const Camera cam = resolveCamera(pose, 256, 160, scene.bounds());
+    for (int threads : {1, 3}) {
+      RenderOptions o;
+      o.cull = Cull::Back;
+      o.threads = threads;
+      const Frame on = render(scene, cam, o);
+      setenv("HSR_DEFER_CLUSTERS", "off", 1);
+      const Frame off = render(scene, cam, o);
+      unsetenv("HSR_DEFER_CLUSTERS");
+      const std::string what = fmt::format("threads {}", threads);
+      EXPECT_EQ(on.faceId, off.faceId) << what;
+      EXPECT_EQ(on.triangleId, off.triangleId) << what;
+      EXPECT_EQ(firstDifference(on.depth, off.depth), -1) << what;
+      EXPECT_EQ(firstDifference(on.color, off.color), -1) << what;
+      EXPECT_EQ(on.stats.culled_backface, off.stats.culled_backface) << what;
+      EXPECT_EQ(on.stats.triangles_degenerate, off.stats.triangles_degenerate) << what;
+      EXPECT_EQ(on.stats.culled_frustum, off.stats.culled_frustum) << what;
+      EXPECT_EQ(on.stats.culled_occlusion, off.stats.culled_occlusion) << what;
+      EXPECT_EQ(on.stats.depth_tests, off.stats.depth_tests) << what;
+      EXPECT_EQ(on.stats.depth_writes, off.stats.depth_writes) << what;
+      EXPECT_GT(on.stats.culled_backface, 5000u) << what;
+    }
+  }
+}
+
 // Deferred back faces and clusters change nothing but the work: with clusters turned off
 // (HSR_DEFER_CLUSTERS=off) or all deferral (HSR_DEFER_BACK_FACES=off) every frame is the same
 // bits. Random triangles show many back faces (drawn late, after being set up again); a closed

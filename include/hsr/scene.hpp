@@ -35,6 +35,8 @@ struct TriangleCluster {
   Bounds3 bounds;        // of its triangles' vertices
   dvec3 axis{0.0};       // unit vector: the direction of the sum of its triangles' unit normals
   double cosCone = -1;   // every triangle's unit normal n has dot(n, axis) >= cosCone
+  double minArea = 0;    // the least area of its triangles
+  double maxEdge = 0;    // the longest edge of its triangles
   bool usable = false;   // full, in one mesh, every triangle well shaped, cosCone >= 1/2
 };
 inline constexpr size_t kClusterTriangles = 64;

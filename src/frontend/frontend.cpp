@@ -186,8 +186,10 @@ ClusterView clusterView(const Camera& cam) {
   for (int c = 0; c < 3; ++c)
     for (int r = 0; r < 3; ++r) rigid &= std::abs(RtR[c][r] - (c == r ? 1.0 : 0.0)) <= 1e-6;
   if (!pinhole || !rigid) return view;
+  if (!(glm::determinant(R) > 0)) return view;  // (a reflection would turn the winding)
   view.eye = -(glm::transpose(R) * dvec3(cam.cameraFromWorld[3]));
   const double fx = P[0][0], skew = P[1][0], fy = P[1][1];
+  view.fx = fx, view.fy = fy, view.skew = skew, view.cx = P[2][0], view.cy = P[2][1];
   view.gradient = 1 / fx + std::abs(skew) / (fx * fy) + 1 / fy;
   view.enabled = std::isfinite(view.gradient) && std::isfinite(view.eye.x) && std::isfinite(view.eye.y) &&
                  std::isfinite(view.eye.z);
@@ -220,10 +222,21 @@ ClusterView clusterView(const Camera& cam) {
 //    (and a camera rotation orthonormal to 1e-6 only).
 // Tiled.DeferredClusterBoundsEveryTriangle (tests/tiled_test.cpp) checks the bound against every
 // triangle's own nearest bound.
-bool deferCluster(const TriangleCluster& cl, const ClusterView& view, const Camera& cam, const dmat4& M,
-                  const DepthSetup& depth, DeferredCluster& out) {
-  constexpr double kAway = 0.1;
-  if (!view.enabled || !cl.usable || depth.orthographic) return false;
+namespace {
+
+constexpr double kAway = 0.1;  // the facing margin (step 1 above)
+
+// What deferCluster and cullCluster share: the facing test (step 1), the clip volume with room
+// to spare, the least and greatest eye depth of the box's corners (conservative) and the
+// extremes of their pixel positions.
+struct ClusterInView {
+  double dist, radius;  // from the eye to the bounding sphere's centre; its radius
+  double zMin, zMax;
+  double x0, y0, x1, y1;
+};
+bool clusterInView(const TriangleCluster& cl, const ClusterView& view, const Camera& cam, const dmat4& M,
+                   ClusterInView& out) {
+  if (!view.enabled || !cl.usable) return false;
   // 1. Facing away by a margin (cheapest test first: most clusters that fail, fail here).
   const dvec3 centre = cl.bounds.center();
   const double radius = 0.5 * glm::length(cl.bounds.hi - cl.bounds.lo) * (1 + 1e-12);
@@ -238,8 +251,10 @@ bool deferCluster(const TriangleCluster& cl, const ClusterView& view, const Came
   if (!(cosBG >= 0)) return false;  // beta + gamma <= pi/2 (both are in [0, pi/2))
   const double cosA = cl.cosCone, sinA = std::sqrt(std::max(0.0, 1 - cosA * cosA));  // alpha <= pi/3
   if (!(cosBG * cosA - sinBG * sinA >= kAway)) return false;
-  // Inside the clip volume with room to spare; the least z; the pixel box.
-  double zMin = std::numeric_limits<double>::infinity(), x0 = zMin, y0 = zMin, x1 = -zMin, y1 = -zMin;
+  // Inside the clip volume with room to spare; depth and pixel extremes of the corners.
+  out.dist = dist, out.radius = radius;
+  out.zMin = out.x0 = out.y0 = std::numeric_limits<double>::infinity();
+  out.zMax = out.x1 = out.y1 = -out.zMin;
   const double planeScale = 2 * kGuardBandPixels + cam.width + cam.height + 1;
   for (int c = 0; c < 8; ++c) {
     const dvec3 p{c & 1 ? cl.bounds.hi.x : cl.bounds.lo.x, c & 2 ? cl.bounds.hi.y : cl.bounds.lo.y,
@@ -252,19 +267,29 @@ bool deferCluster(const TriangleCluster& cl, const ClusterView& view, const Came
     const double magnitude = terms(0) + terms(1) + terms(2) + wTerms * planeScale + cam.near + cam.far;
     for (int plane = 0; plane < kPlanes; ++plane)
       if (!(planeDistance(h, plane, cam) > 1e-9 * magnitude)) return false;
-    zMin = std::min(zMin, h.w - 1e-12 * wTerms);
+    out.zMin = std::min(out.zMin, h.w - 1e-12 * wTerms);
+    out.zMax = std::max(out.zMax, h.w + 1e-12 * wTerms);
     const double sx = h.hx / h.w, sy = h.hy / h.w;
-    x0 = std::min(x0, sx), x1 = std::max(x1, sx), y0 = std::min(y0, sy), y1 = std::max(y1, sy);
+    out.x0 = std::min(out.x0, sx), out.x1 = std::max(out.x1, sx);
+    out.y0 = std::min(out.y0, sy), out.y1 = std::max(out.y1, sy);
   }
-  if (!(zMin > 0)) return false;
+  return out.zMin > 0;
+}
+
+}  // namespace
+
+bool deferCluster(const TriangleCluster& cl, const ClusterView& view, const Camera& cam, const dmat4& M,
+                  const DepthSetup& depth, DeferredCluster& out) {
+  ClusterInView in;
+  if (depth.orthographic || !clusterInView(cl, view, cam, M, in)) return false;
   // Pixels whose centres a triangle inside may cover (a pixel of margin: snapping moves 1/512).
-  const double bx0 = std::max(0.0, std::floor(x0) - 1), bx1 = std::min(double(cam.width - 1), std::ceil(x1) + 1);
-  const double by0 = std::max(0.0, std::floor(y0) - 1), by1 = std::min(double(cam.height - 1), std::ceil(y1) + 1);
+  const double bx0 = std::max(0.0, std::floor(in.x0) - 1), bx1 = std::min(double(cam.width - 1), std::ceil(in.x1) + 1);
+  const double by0 = std::max(0.0, std::floor(in.y0) - 1), by1 = std::min(double(cam.height - 1), std::ceil(in.y1) + 1);
   if (!(bx0 <= bx1 && by0 <= by1)) return false;
   out.minX = int16_t(bx0), out.maxX = int16_t(bx1), out.minY = int16_t(by0), out.maxY = int16_t(by1);
   // 2.-4. The largest D, as an eye depth, mapped and stored.
-  const double gradient = view.gradient / (0.5 * kAway * (dist - radius));
-  const double largestD = (1 / zMin) * (1 + 1e-6) + 2 * gradient / double(kSubpixelOne);
+  const double gradient = view.gradient / (0.5 * kAway * (in.dist - in.radius));
+  const double largestD = (1 / in.zMin) * (1 + 1e-6) + 2 * gradient / double(kSubpixelOne);
   const double nearestDepth = (1 / largestD) * (1 - 1e-12);
   visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping Map>() {
     double v = mapDepth<Map>(nearestDepth, depth.near, depth.far, false);
@@ -272,6 +297,28 @@ bool deferCluster(const TriangleCluster& cl, const ClusterView& view, const Came
     out.nearest = double(quantizeDepth<S>(std::clamp(v, 0.0, 1.0)));
   });
   return std::isfinite(out.nearest);
+}
+
+// Why every triangle of a cluster cullCluster accepts has a snapped signed area > 0, the back
+// faces of setupTriangle: on a plane n . X = c (unit n = (v1 - v0) x (v2 - v0) normalized, camera
+// space) the image's area element is fx fy c / z^3 times the triangle's (skew does not change
+// the determinant), so its exact image has signed area of the sign of c — positive when it faces
+// away — and at least fx fy c minArea / zMax^3, with c >= kAway/2 (dist - radius) (step 1). A
+// triangle edge of length L at depth >= zMin moves u by at most (fx + |s| + |u - cx|) L / zMin and
+// v by (fy + |v - cy|) L / zMin (du = (fx dX + s dY - (u - cx) dZ) / z), so its image's edges have
+// L1 lengths at most E = (fx + |s| + fy + U + V) maxEdge / zMin. Snapping (and the projection's
+// rounding) moves each corner by at most delta = 1/512 pixel in x and y, which changes twice the
+// signed area by at most 4 delta E + 8 delta^2: less than twice the area, so the sign holds.
+bool cullCluster(const TriangleCluster& cl, const ClusterView& view, const Camera& cam, const dmat4& M) {
+  ClusterInView in;
+  if (!clusterInView(cl, view, cam, M, in)) return false;
+  const double c = 0.5 * kAway * (in.dist - in.radius);
+  const double area = view.fx * view.fy * c * cl.minArea * (1 - 1e-9) / (in.zMax * in.zMax * in.zMax);
+  const double U = std::max(std::abs(in.x0 - view.cx), std::abs(in.x1 - view.cx));
+  const double V = std::max(std::abs(in.y0 - view.cy), std::abs(in.y1 - view.cy));
+  const double edge = (view.fx + std::abs(view.skew) + view.fy + U + V) * cl.maxEdge * (1 + 1e-9) / in.zMin;
+  const double delta = (1.0 / (2 * kSubpixelOne)) * (1 + 1e-6);
+  return 2 * area > 4 * delta * edge + 8 * delta * delta;
 }
 
 size_t FrontEndOutput::triangleCount() const {
@@ -341,12 +388,21 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
   for (size_t ti = begin; ti < end; ++ti) {
     const Triangle& tri = scene.triangles[ti];
     if (clusters && ti % kClusterTriangles == 0 && fe.faceVisible[tri.face]) {  // (a cluster is in one mesh)
-      DeferredCluster dc;
-      if (deferCluster(scene.clusters[ti / kClusterTriangles], *clusters, cam, fe.pixelFromWorld, *depth, dc)) {
-        dc.cluster = uint32_t(ti / kClusterTriangles);
-        out.clusters.push_back(dc);
-        ti += kClusterTriangles - 1;
-        continue;
+      const TriangleCluster& cluster = scene.clusters[ti / kClusterTriangles];
+      if (options.cull == Cull::Back) {  // each of its triangles a back face: culled, as set-up would
+        if (cullCluster(cluster, *clusters, cam, fe.pixelFromWorld)) {
+          counters.culledBackface += kClusterTriangles;
+          ti += kClusterTriangles - 1;
+          continue;
+        }
+      } else if (defer) {
+        DeferredCluster dc;
+        if (deferCluster(cluster, *clusters, cam, fe.pixelFromWorld, *depth, dc)) {
+          dc.cluster = uint32_t(ti / kClusterTriangles);
+          out.clusters.push_back(dc);
+          ti += kClusterTriangles - 1;
+          continue;
+        }
       }
     }
     if (!fe.faceVisible[tri.face]) {
@@ -420,7 +476,7 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
   // submission order), each handed to the consumer by the worker that set it up.
   const size_t nt = scene.triangles.size();
   const TriangleShader shade(scene, cam, options.shading);
-  const bool clusters = deferBackFaces && deferClusters && nearestFor &&
+  const bool clusters = ((deferBackFaces && nearestFor) || options.cull == Cull::Back) && deferClusters &&
                         scene.clusters.size() == (nt + kClusterTriangles - 1) / kClusterTriangles;
   const ClusterView view = clusters ? clusterView(cam) : ClusterView{};
   out.chunkCount = (nt + kChunkTriangles - 1) / kChunkTriangles;

@@ -216,7 +216,8 @@ size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
 /// the triangles' nearest bounds in that depth setup. With `deferBackFaces` too, the back faces
 /// setupBatch can defer are in the chunks' `deferred` lists, and the clusters that face away
 /// from the eye (deferCluster; unless `deferClusters` is false) in their `clusters` lists, not
-/// in `triangles`.
+/// in `triangles`. With options.cull == Cull::Back (and `deferClusters`), clusters cullCluster
+/// accepts are culled whole.
 void runFrontEnd(const Scene& scene, const Camera& camera, const RenderOptions& options, FrontEndOutput& out,
                  const ChunkConsumer& consumer = {}, const DepthSetup* nearestFor = nullptr,
                  bool deferBackFaces = false, bool deferClusters = true);
@@ -226,8 +227,15 @@ struct ClusterView {
   bool enabled = false;  // a perspective camera of the kind resolveCamera makes (no cluster is deferred otherwise)
   dvec3 eye{0.0};        // the centre of projection, in world space
   double gradient = 0;   // 1/fx + |skew|/(fx fy) + 1/fy: see deferCluster
+  double fx = 0, fy = 0, skew = 0, cx = 0, cy = 0;  // the intrinsics (pixelFromCamera)
 };
 ClusterView clusterView(const Camera& cam);
+
+/// With Cull::Back: whether every triangle of `cluster` is a back face for setupTriangle (its
+/// snapped signed area is > 0) and inside the clip volume, so runFrontEnd culls the cluster whole
+/// (counted as kClusterTriangles back faces) without looking at its triangles (see frontend.cpp).
+bool cullCluster(const TriangleCluster& cluster, const ClusterView& view, const Camera& cam,
+                 const dmat4& pixelFromWorld);
 
 /// Whether runFrontEnd(deferBackFaces = true) defers cluster `cluster` of a scene (see
 /// DeferredCluster), and if so its box and nearest bound in `out` (out.cluster is left to the

@@ -57,6 +57,8 @@ void buildClusters(Scene& scene) {
       const double len = glm::length(n);
       const double edge = std::max({glm::dot(b - a, b - a), glm::dot(p - b, p - b), glm::dot(a - p, a - p)});
       if (!(len >= kMinShape * edge) || !(len > 0) || !std::isfinite(len)) usable = false;
+      cl.minArea = t == first ? 0.5 * len : std::min(cl.minArea, 0.5 * len);
+      cl.maxEdge = std::max(cl.maxEdge, std::sqrt(edge));
       normals[t - first] = usable ? n / len : dvec3{0.0};
       sum += normals[t - first];
     }
