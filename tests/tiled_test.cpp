@@ -84,6 +84,32 @@ std::vector<CameraSpec> poses(const Scene& scene, int random, uint64_t seed) {
   return list;
 }
 
+// A camera inside the scene's bounding box (for the sphere: looking at its far side, which faces
+// away from it).
+CameraSpec insideCamera(const Scene& scene) {
+  CameraSpec inside;
+  inside.eye = scene.bounds().center() + dvec3(0.1, 0.05, 0.2);
+  inside.target = inside.eye + dvec3(0.2, -0.3, -1);
+  inside.fovyDeg = 80;
+  return inside;
+}
+
+// Cameras on one ray from the scene's centre, at these multiples of its bounding radius:
+// close-ups with a 90-degree lens, those farther than 10 with a 3-degree one.
+std::vector<CameraSpec> alongRay(const Scene& scene, std::initializer_list<double> distances) {
+  const Bounds3 b = scene.bounds();
+  const double r = glm::length(b.hi - b.lo) * 0.5;
+  std::vector<CameraSpec> list;
+  for (double d : distances) {
+    CameraSpec p;
+    p.eye = b.center() + glm::normalize(dvec3(0.3, 0.4, 1)) * (r * d);
+    p.target = b.center() + dvec3(0.05 * r, 0, 0);
+    p.fovyDeg = d > 10 ? 3 : 90;
+    list.push_back(p);
+  }
+  return list;
+}
+
 Frame renderWith(const Scene& scene, const Camera& cam, DepthFormat format, RasterKind raster, int threads,
                  FrameOutputs outputs = FrameOutputs::All) {
   RenderOptions o;
@@ -576,15 +602,7 @@ TEST(Tiled, DeferredBackFaceTiesGoToTheTriangleSubmittedFirst) {
 TEST(Tiled, DeferredClusterBoundsEveryTriangle) {
   const Scene scene = loadScene("builtin:sphere?n=20000");
   std::vector<CameraSpec> cameras = poses(scene, 12, 17);
-  const Bounds3 b = scene.bounds();
-  const double r = glm::length(b.hi - b.lo) * 0.5;
-  for (double d : {1.02, 1.2, 2.0, 40.0}) {  // close-ups (the near side is clipped), far away
-    CameraSpec p;
-    p.eye = b.center() + glm::normalize(dvec3(0.3, 0.4, 1)) * (r * d);
-    p.target = b.center() + dvec3(0.05 * r, 0, 0);
-    p.fovyDeg = d > 10 ? 3 : 90;
-    cameras.push_back(p);
-  }
+  for (const CameraSpec& p : alongRay(scene, {1.02, 1.2, 2.0, 40.0})) cameras.push_back(p);  // (1.02: near side clipped)
   size_t clusters = 0, triangles = 0;
   for (const CameraSpec& pose : cameras)
     for (auto [w, h] : {std::pair{256, 160}, std::pair{1920, 1080}}) {
@@ -629,15 +647,8 @@ TEST(Tiled, DeferredClusterBoundsEveryTriangle) {
 TEST(Tiled, CulledClustersAreBackFacesEveryTriangle) {
   const Scene scene = loadScene("builtin:sphere?n=20000");
   std::vector<CameraSpec> cameras = poses(scene, 12, 17);
-  const Bounds3 b = scene.bounds();
-  const double r = glm::length(b.hi - b.lo) * 0.5;
-  for (double d : {1.02, 1.2, 2.0, 40.0, 400.0, 40000.0}) {  // (farthest: triangles of 1/1000 pixel)
-    CameraSpec p;
-    p.eye = b.center() + glm::normalize(dvec3(0.3, 0.4, 1)) * (r * d);
-    p.target = b.center() + dvec3(0.05 * r, 0, 0);
-    p.fovyDeg = d > 10 ? 3 : 90;
+  for (const CameraSpec& p : alongRay(scene, {1.02, 1.2, 2.0, 40.0, 400.0, 40000.0}))  // (40000: 1/1000-pixel triangles)
     cameras.push_back(p);
-  }
   size_t culled = 0;
   for (const CameraSpec& pose : cameras)
     for (auto [w, h] : {std::pair{256, 160}, std::pair{1920, 1080}}) {
@@ -674,11 +685,7 @@ TEST(Tiled, CulledClustersAreBackFacesEveryTriangle) {
 TEST(Tiled, CulledClustersChangeNoBitNorCount) {
   const Scene scene = loadScene("builtin:sphere?n=20000");
   std::vector<CameraSpec> cameras = poses(scene, 3, 23);
-  CameraSpec inside;
-  inside.eye = scene.bounds().center() + dvec3(0.1, 0.05, 0.2);
-  inside.target = inside.eye + dvec3(0.2, -0.3, -1);
-  inside.fovyDeg = 80;
-  cameras.push_back(inside);
+  cameras.push_back(insideCamera(scene));
   for (const CameraSpec& pose : cameras) {
     const Camera cam = resolveCamera(pose, 256, 160, scene.bounds());
     for (int threads : {1, 3}) {
@@ -718,13 +725,7 @@ TEST(Tiled, DeferredBackFacesChangeNoBit) {
   for (const Case& c : {Case{"builtin:random?n=3000&size=0.05", true}, Case{"builtin:sphere?n=20000", false}}) {
     const Scene scene = loadScene(c.scene);
     std::vector<CameraSpec> cameras = poses(scene, 2, 5);
-    if (!c.backFacesShow) {  // inside the sphere: its far side faces away, deferred, and shows
-      CameraSpec inside;
-      inside.eye = scene.bounds().center() + dvec3(0.1, 0.05, 0.2);
-      inside.target = inside.eye + dvec3(0.2, -0.3, -1);
-      inside.fovyDeg = 80;
-      cameras.push_back(inside);
-    }
+    if (!c.backFacesShow) cameras.push_back(insideCamera(scene));  // the far side: deferred, and shows
     for (const CameraSpec& pose : cameras) {
       const bool inside = &pose == &cameras.back() && !c.backFacesShow;
       const Camera cam = resolveCamera(pose, 256, 160, scene.bounds());
