@@ -190,8 +190,7 @@ ClusterView clusterView(const Camera& cam) {
   view.eye = -(glm::transpose(R) * dvec3(cam.cameraFromWorld[3]));
   const double fx = P[0][0], skew = P[1][0], fy = P[1][1];
   view.fx = fx, view.fy = fy, view.skew = skew, view.cx = P[2][0], view.cy = P[2][1];
-  view.gradient = 1 / fx + std::abs(skew) / (fx * fy) + 1 / fy;
-  view.enabled = std::isfinite(view.gradient) && std::isfinite(view.eye.x) && std::isfinite(view.eye.y) &&
+  view.enabled = std::isfinite(view.gradient()) && std::isfinite(view.eye.x) && std::isfinite(view.eye.y) &&
                  std::isfinite(view.eye.z);
   return view;
 }
@@ -288,7 +287,7 @@ bool deferCluster(const TriangleCluster& cl, const ClusterView& view, const Came
   if (!(bx0 <= bx1 && by0 <= by1)) return false;
   out.minX = int16_t(bx0), out.maxX = int16_t(bx1), out.minY = int16_t(by0), out.maxY = int16_t(by1);
   // 2.-4. The largest D, as an eye depth, mapped and stored.
-  const double gradient = view.gradient / (0.5 * kAway * (in.dist - in.radius));
+  const double gradient = view.gradient() / (0.5 * kAway * (in.dist - in.radius));
   const double largestD = (1 / in.zMin) * (1 + 1e-6) + 2 * gradient / double(kSubpixelOne);
   const double nearestDepth = (1 / largestD) * (1 - 1e-12);
   visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping Map>() {

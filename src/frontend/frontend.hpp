@@ -11,6 +11,7 @@
 
 #include "core/shading.hpp"
 
+#include <cmath>
 #include <functional>
 #include <vector>
 
@@ -226,8 +227,9 @@ void runFrontEnd(const Scene& scene, const Camera& camera, const RenderOptions& 
 struct ClusterView {
   bool enabled = false;  // a perspective camera of the kind resolveCamera makes (no cluster is deferred otherwise)
   dvec3 eye{0.0};        // the centre of projection, in world space
-  double gradient = 0;   // 1/fx + |skew|/(fx fy) + 1/fy: see deferCluster
   double fx = 0, fy = 0, skew = 0, cx = 0, cy = 0;  // the intrinsics (pixelFromCamera)
+  /// 1/fx + |skew|/(fx fy) + 1/fy: see deferCluster.
+  double gradient() const { return 1 / fx + std::abs(skew) / (fx * fy) + 1 / fy; }
 };
 ClusterView clusterView(const Camera& cam);
 

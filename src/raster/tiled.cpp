@@ -329,7 +329,7 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
   }
   sortPairs(cl, tiles, [&](uint32_t i) { return clusters[i].nearest; });
   cl.itemBox.resize(cl.items.size());
-  for (size_t t = 0; t < tiles; ++t) {
+  for (size_t t = 0; t < tiles && k > 0; ++t) {
     const int tx0 = int(t % size_t(bins.tilesX)) * kTileSize, ty0 = int(t / size_t(bins.tilesX)) * kTileSize;
     for (uint32_t item = cl.start[t]; item < cl.start[t + 1]; ++item) {
       const DeferredCluster& d = clusters[cl.items[item]];
@@ -462,7 +462,11 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
     counters.setUpLate += n;
     batched = 0;
   };
-  for (size_t c = 0; c < bins.chunkCount; ++c) {
+  // (Each set is a walk over every chunk's lists: skipped when countEntries says it is empty here.)
+  const size_t tiles = size_t(bins.tileCount());
+  const bool anyFaces = bins.tileEntries.empty() || bins.tileEntries[tiles + size_t(tile)] > 0;
+  const bool anyClusters = bins.tileEntries.empty() || bins.tileEntries[2 * tiles + size_t(tile)] > 0;
+  for (size_t c = 0; c < bins.chunkCount && anyFaces; ++c) {
     const ChunkBins& cb = bins.late[c];
     for (uint32_t item = cb.start[size_t(tile)], end = cb.start[size_t(tile) + 1]; item < end; ++item) {
       const double nearest = cb.itemNearest[item];
@@ -483,7 +487,7 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
   }
   if (batched) flush();
   const int tx0 = (tile % bins.tilesX) * kTileSize, ty0 = (tile / bins.tilesX) * kTileSize;
-  for (size_t c = 0; c < bins.chunkCount; ++c) {
+  for (size_t c = 0; c < bins.chunkCount && anyClusters; ++c) {
     const ChunkBins& cl = bins.clusters[c];
     const uint32_t firstTriangle = uint32_t(c * kChunkTriangles);
     for (uint32_t item = cl.start[size_t(tile)], end = cl.start[size_t(tile) + 1]; item < end; ++item) {
