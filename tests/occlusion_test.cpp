@@ -42,7 +42,7 @@ Frame referenceDepth(const Scene& scene, const Camera& cam, DepthFormat format) 
   return render(scene, cam, o);
 }
 
-long firstDifference(const std::vector<float>& a, const std::vector<float>& b) {
+long firstDifference(const FrameBuffer<float>& a, const FrameBuffer<float>& b) {
   if (a.size() != b.size()) return 0;
   for (size_t i = 0; i < a.size(); ++i)
     if (std::memcmp(&a[i], &b[i], sizeof(float)) != 0) return long(i);

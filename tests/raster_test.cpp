@@ -9,6 +9,7 @@
 #include <map>
 #include <random>
 
+#include "core/stream_fill.hpp"
 #include "frontend/frontend.hpp"
 #include "raster/fragment_depth.hpp"
 #include "raster/halfspace.hpp"
@@ -439,6 +440,42 @@ TEST(Raster, BatchedNearestBoundsEqualScalarOnEveryInstructionSet) {
   }
   hwy::SetSupportedTargetsForTest(0);
   EXPECT_GT(checkedFragments, 1000u);
+}
+
+// The frame's buffers start on a cache line, so that rows of a width divisible by 16 do too and
+// the resolve can stream whole lines (core/stream-inl.h); std::allocator gives 16 bytes here.
+TEST(Stream, FrameBuffersAreCacheLineAligned) {
+  for (auto [w, h] : {std::pair{1, 1}, std::pair{333, 97}, std::pair{1920, 1080}}) {
+    Frame frame;
+    frame.allocate(w, h);
+    for (const void* p : {static_cast<const void*>(frame.faceId.data()), static_cast<const void*>(frame.triangleId.data()),
+                          static_cast<const void*>(frame.depth.data()), static_cast<const void*>(frame.color.data())})
+      EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % 64, 0u) << w << "x" << h;
+  }
+}
+
+// streamFill writes its range and nothing else, from every offset into a cache line, for lengths
+// shorter than a line, across one, and many lines, on every instruction set (streams for whole
+// lines, ordinary stores for the rest).
+TEST(Stream, FillWritesExactlyItsRangeOnEveryInstructionSet) {
+  constexpr uint32_t kGuard = 0xAAAAAAAAu;
+  FrameBuffer<uint32_t> buffer(400);
+  int targets = 0;
+  for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
+    hwy::SetSupportedTargetsForTest(target);
+    ++targets;
+    for (size_t offset = 0; offset < 34; ++offset)
+      for (size_t n : {0, 1, 3, 13, 15, 16, 17, 31, 32, 33, 48, 63, 64, 65, 100, 129, 300}) {
+        std::fill(buffer.begin(), buffer.end(), kGuard);
+        const uint32_t value = 0x12345600u + uint32_t(n);
+        streamFill(buffer.data() + offset, value, n);
+        for (size_t i = 0; i < buffer.size(); ++i)
+          ASSERT_EQ(buffer[i], i >= offset && i < offset + n ? value : kGuard)
+              << hwy::TargetName(target) << " offset " << offset << " n " << n << " at " << i;
+      }
+  }
+  hwy::SetSupportedTargetsForTest(0);
+  EXPECT_GE(targets, 2);
 }
 
 }  // namespace hsr

@@ -122,7 +122,7 @@ Frame renderWith(const Scene& scene, const Camera& cam, DepthFormat format, Rast
 
 // First pixel where two per-pixel vectors differ bitwise, or -1.
 template <class T>
-long firstDifference(const std::vector<T>& a, const std::vector<T>& b) {
+long firstDifference(const FrameBuffer<T>& a, const FrameBuffer<T>& b) {
   if (a.size() != b.size()) return 0;
   for (size_t i = 0; i < a.size(); ++i)
     if (std::memcmp(&a[i], &b[i], sizeof(T)) != 0) return long(i);

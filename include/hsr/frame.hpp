@@ -4,13 +4,34 @@
 #pragma once
 #include <hsr/common.hpp>
 
+#include <cstddef>
 #include <limits>
+#include <new>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace hsr {
+
+/// The allocator of Frame's buffers: memory aligned to a 64-byte cache line, so that the rows of
+/// an image whose width is a multiple of 16 pixels start on a cache line and the tiled rasterizer
+/// can write whole lines with streaming (non-temporal) stores. A std::allocator otherwise.
+template <class T>
+struct CacheLineAllocator {
+  using value_type = T;
+  static constexpr std::align_val_t kAlignment{64};
+  CacheLineAllocator() = default;
+  template <class U>
+  CacheLineAllocator(const CacheLineAllocator<U>&) noexcept {}
+  T* allocate(size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), kAlignment)); }
+  void deallocate(T* p, size_t) noexcept { ::operator delete(p, kAlignment); }
+  template <class U>
+  bool operator==(const CacheLineAllocator<U>&) const noexcept { return true; }
+};
+/// A frame buffer: a std::vector with cache-line aligned storage.
+template <class T>
+using FrameBuffer = std::vector<T, CacheLineAllocator<T>>;
 
 /// Counters and timings of one frame. Counts are exact integers; times in milliseconds.
 struct Stats {
@@ -44,10 +65,10 @@ struct Stats {
 
 struct Frame {
   int width = 0, height = 0;
-  std::vector<int32_t> faceId;      // face index, -1 background; row 0 = top
-  std::vector<int32_t> triangleId;  // index into Scene::triangles, -1 background
-  std::vector<float> depth;         // eye-space depth, +inf background
-  std::vector<Rgba8> color;         // shaded colour, background colour where empty
+  FrameBuffer<int32_t> faceId;      // face index, -1 background; row 0 = top
+  FrameBuffer<int32_t> triangleId;  // index into Scene::triangles, -1 background
+  FrameBuffer<float> depth;         // eye-space depth, +inf background
+  FrameBuffer<Rgba8> color;         // shaded colour, background colour where empty
   Stats stats;
 
   /// Sizes the buffers for w x h, reusing their memory: depth always, faceId and triangleId when

@@ -186,6 +186,7 @@ void OcclusionBuffer::depthImage(Frame& frame) const {
         covered[ty] += tiled::resolveTile(bins, tile, im.depth, FrameOutputs::DepthOnly, nullptr, Rgba8{},
                                           im.tiles[size_t(tile)], frame, row, row + 8);
       }
+    tiled::finishResolves();
   });
   for (uint64_t c : covered) frame.stats.covered_pixels += c;
 }

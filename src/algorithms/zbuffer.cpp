@@ -130,6 +130,7 @@ void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const Triangle
           state.covered[size_t(first + i)] += tiled::resolveTile(bins, first + i, depth, opt.outputs, &shade,
                                                                  opt.background, scratch[i], frame, row, row + kResolveBand);
     }
+    tiled::finishResolves();
   });
   for (int tile = 0; tile < bins.tileCount(); ++tile) {
     total.add(state.counters[size_t(tile)]);

@@ -3,10 +3,12 @@
 #include <hsr/frame.hpp>
 
 #include <algorithm>
+#include <cstring>
 #include <limits>
 #include <nlohmann/json.hpp>
 
 #include "core/parallel.hpp"
+#include "core/stream_fill.hpp"
 
 namespace hsr {
 
@@ -60,11 +62,15 @@ void Frame::allocate(int w, int h, bool ids, bool withColor) {
 }
 
 void Frame::clear(Rgba8 background, int threads) {
-  // The clear is a pass over up to 16 bytes a pixel: worth splitting for large frames.
+  // The clear is a pass over up to 16 bytes a pixel: worth splitting for large frames, and written
+  // with streaming stores (core/stream_fill.hpp; chunks of whole cache lines).
   const size_t n = depth.size(), chunk = 1 << 16;
   auto fill = [chunk](auto& buffer, size_t c, auto value) {
+    static_assert(sizeof(value) == sizeof(uint32_t));
     const size_t b = std::min(buffer.size(), c * chunk), e = std::min(buffer.size(), b + chunk);
-    std::fill(buffer.begin() + std::ptrdiff_t(b), buffer.begin() + std::ptrdiff_t(e), value);
+    uint32_t bits;
+    std::memcpy(&bits, &value, sizeof bits);
+    streamFill(reinterpret_cast<uint32_t*>(buffer.data() + b), bits, e - b);
   };
   parallelFor(0, (n + chunk - 1) / chunk, threads, [&](size_t c) {
     fill(faceId, c, -1);

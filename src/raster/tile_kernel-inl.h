@@ -33,6 +33,7 @@
 #include <stdexcept>
 
 #include "core/depth_map.hpp"
+#include "core/stream-inl.h"
 #include "raster/fragment_depth.hpp"
 #include "raster/edge.hpp"
 #include "raster/tiled.hpp"
@@ -41,6 +42,8 @@ HWY_BEFORE_NAMESPACE();
 namespace hsr::tiled {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
+
+using hsr::stream::HWY_NAMESPACE::StreamCopy;
 
 using D = hn::CappedTag<double, kBlockSize>;  // at most one block row per vector
 using V = hn::Vec<D>;
@@ -605,15 +608,6 @@ HWY_INLINE V EyeDepthOfStored(V q, const DepthSetup& depth) {
   }
 }
 
-// Stores the first `count` lanes of v at p.
-template <class DT>
-HWY_INLINE void StorePartial(hn::Vec<DT> v, DT dt, size_t count, hn::TFromD<DT>* p) {
-  if (count == hn::Lanes(dt)) return hn::StoreU(v, dt, p);
-  HWY_ALIGN hn::TFromD<DT> lanes[hn::MaxLanes(dt)];
-  hn::Store(v, dt, lanes);
-  std::copy(lanes, lanes + count, p);
-}
-
 // Depth only: the eye depth of every stored value that left the clear value, +inf elsewhere
 // (every pixel of the tile is written).
 template <DepthStorage S, DepthMapping M>
@@ -628,12 +622,13 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
                                                                      job.depth.far, job.depth.orthographic)
                                                       : MappedPlanes{};
   uint64_t covered = 0;
-  for (int y = rowBegin; y < std::min(rowEnd, tf.h); ++y)
+  HWY_ALIGN float row[kTileSize];  // a row of the tile, then streamed into the frame (core/stream-inl.h)
+  for (int y = rowBegin; y < std::min(rowEnd, tf.h); ++y) {
     for (size_t k = 0; k < size_t(tf.w); k += N) {
       const size_t count = std::min(N, size_t(tf.w) - k);
-      float* out = frame.depth.data() + frame.index(tf.x0 + int(k), tf.y0 + y);
+      float* out = row + k;
       if (s.state == TileState::Clear) {
-        StorePartial(hn::DemoteTo(df, infinity), df, count, out);
+        hn::Store(hn::DemoteTo(df, infinity), df, out);
         continue;
       }
       const int b = (y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize;  // lanes within one block
@@ -650,8 +645,11 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
       const Mask drawn = hn::And(hn::FirstN(d, count), hn::Ne(q, clearV));
       covered += hn::CountTrue(d, drawn);
       const V eye = hn::IfThenElse(drawn, EyeDepthOfStored<S, M>(q, job.depth), infinity);
-      StorePartial(hn::DemoteTo(df, eye), df, count, out);
+      hn::Store(hn::DemoteTo(df, eye), df, out);
     }
+    StreamCopy(reinterpret_cast<uint32_t*>(frame.depth.data() + frame.index(tf.x0, tf.y0 + y)),
+               reinterpret_cast<const uint32_t*>(row), size_t(tf.w));
+  }
   return covered;
 }
 
@@ -771,15 +769,15 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
   const uint64_t tileKey = s.state == TileState::Plane ? s.planeKey : 0;
   const auto noId = hn::Set(du32, Bits32(int32_t(-1)));
   uint64_t covered = 0;
+  HWY_ALIGN uint32_t rows[4][kTileSize];  // a row of the tile per output, then streamed (core/stream-inl.h)
   for (int y = rowBegin; y < std::min(rowEnd, h); ++y) {
     const double Y = double(y0 + y) + 0.5;
     for (size_t k = 0; k < size_t(w); k += N) {
       const size_t count = std::min(N, size_t(w) - k);
-      const size_t at = frame.index(x0 + int(k), y0 + y);
-      uint32_t* depthOut = reinterpret_cast<uint32_t*>(frame.depth.data() + at);
-      uint32_t* faceOut = reinterpret_cast<uint32_t*>(frame.faceId.data() + at);
-      uint32_t* triangleOut = reinterpret_cast<uint32_t*>(frame.triangleId.data() + at);
-      uint32_t* colorOut = reinterpret_cast<uint32_t*>(frame.color.data() + at);
+      uint32_t* depthOut = rows[0] + k;
+      uint32_t* faceOut = rows[1] + k;
+      uint32_t* triangleOut = rows[2] + k;
+      uint32_t* colorOut = rows[3] + k;
       const int b = (y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize;  // (lanes within one block)
       const uint64_t blockKey = s.state == TileState::Pixels ? s.blockKey[b] : 0;
       const bool empty = s.state == TileState::Pixels && s.blockClear[b];
@@ -788,29 +786,34 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
         hn::LoadInterleaved2(du32, reinterpret_cast<const uint32_t*>(s.depth + size_t(y) * kTileSize + k), eye, face);
         hn::LoadInterleaved2(du32, reinterpret_cast<const uint32_t*>(s.triangle + size_t(y) * kTileSize + k), triangle,
                              color);
-        StorePartial(eye, du32, count, depthOut);
-        StorePartial(face, du32, count, faceOut);
-        StorePartial(triangle, du32, count, triangleOut);
-        if constexpr (kColor) StorePartial(color, du32, count, colorOut);
+        hn::Store(eye, du32, depthOut);
+        hn::Store(face, du32, faceOut);
+        hn::Store(triangle, du32, triangleOut);
+        if constexpr (kColor) hn::Store(color, du32, colorOut);
         covered += hn::CountTrue(du32, hn::AndNot(hn::Eq(triangle, noId), hn::FirstN(du32, count)));
         continue;
       }
       const uint64_t key = s.state == TileState::Pixels ? blockKey : tileKey;  // (0 when empty)
       if (!key) {
-        StorePartial(hn::Set(du32, Bits32(std::numeric_limits<float>::infinity())), du32, count, depthOut);
-        StorePartial(noId, du32, count, faceOut);
-        StorePartial(noId, du32, count, triangleOut);
-        if constexpr (kColor) StorePartial(hn::Set(du32, backgroundBits), du32, count, colorOut);
+        hn::Store(hn::Set(du32, Bits32(std::numeric_limits<float>::infinity())), du32, depthOut);
+        hn::Store(noId, du32, faceOut);
+        hn::Store(noId, du32, triangleOut);
+        if constexpr (kColor) hn::Store(hn::Set(du32, backgroundBits), du32, colorOut);
         continue;
       }
       const SetupTriangle& t = bins.triangle(key);
       const V X = hn::Iota(d, double(x0 + int(k)) + 0.5);
-      StorePartial(hn::BitCast(du32, hn::DemoteTo(df, EyeDepthRow(t, X, Y))), du32, count, depthOut);
-      StorePartial(hn::Set(du32, Bits32(int32_t(t.face))), du32, count, faceOut);
-      StorePartial(hn::Set(du32, Bits32(int32_t(t.triangle))), du32, count, triangleOut);
-      if constexpr (kColor) StorePartial(hn::Set(du32, colorOf(key, t)), du32, count, colorOut);
+      hn::Store(hn::BitCast(du32, hn::DemoteTo(df, EyeDepthRow(t, X, Y))), du32, depthOut);
+      hn::Store(hn::Set(du32, Bits32(int32_t(t.face))), du32, faceOut);
+      hn::Store(hn::Set(du32, Bits32(int32_t(t.triangle))), du32, triangleOut);
+      if constexpr (kColor) hn::Store(hn::Set(du32, colorOf(key, t)), du32, colorOut);
       covered += count;
     }
+    const size_t at = frame.index(x0, y0 + y);
+    StreamCopy(reinterpret_cast<uint32_t*>(frame.depth.data() + at), rows[0], size_t(w));
+    StreamCopy(reinterpret_cast<uint32_t*>(frame.faceId.data() + at), rows[1], size_t(w));
+    StreamCopy(reinterpret_cast<uint32_t*>(frame.triangleId.data() + at), rows[2], size_t(w));
+    if constexpr (kColor) StreamCopy(reinterpret_cast<uint32_t*>(frame.color.data() + at), rows[3], size_t(w));
   }
   return covered;
 }
@@ -841,6 +844,8 @@ void RasterizeTile(const TileJob& job) {
 }
 
 const char* KernelTarget() { return hwy::TargetName(HWY_TARGET); }
+
+void FlushStreams() { hwy::FlushStream(); }
 
 }  // namespace HWY_NAMESPACE
 }  // namespace hsr::tiled

@@ -30,6 +30,7 @@ HWY_EXPORT(RasterizeTile);
 HWY_EXPORT(ResolveTile);
 HWY_EXPORT(PrepareResolve);
 HWY_EXPORT(KernelTarget);
+HWY_EXPORT(FlushStreams);
 
 void Bins::countEntries() {
   const size_t tiles = size_t(tileCount());
@@ -633,6 +634,8 @@ bool anyFarther(const Bins& bins, int tile, const DepthSetup& depth, const TileS
 }
 
 const char* kernelTarget() { return HWY_DYNAMIC_DISPATCH(KernelTarget)(); }
+
+void finishResolves() { HWY_DYNAMIC_DISPATCH(FlushStreams)(); }
 
 }  // namespace hsr::tiled
 #endif  // HWY_ONCE

@@ -319,9 +319,13 @@ void prepareResolve(const Bins& bins, int tile, FrameOutputs outputs, const Tria
 /// (64 rows x 4 buffers of scattered 256-byte pieces defeat the hardware prefetchers and TLB),
 /// measured on this project's 2-core VM. With ids, the tile must have been through
 /// prepareResolve() (std::logic_error otherwise). Returns the number of covered pixels.
+/// The frame's whole cache lines are written with streaming stores: a thread that called
+/// resolveTile calls finishResolves() before another thread reads the frame.
 uint64_t resolveTile(const Bins& bins, int tile, const DepthSetup& depth, FrameOutputs outputs,
                      const TriangleShader* shader, Rgba8 background, const TileScratch& scratch, Frame& frame,
                      int rowBegin = 0, int rowEnd = kTileSize);
+/// Makes the calling thread's resolveTile() writes visible to other threads (a store fence).
+void finishResolves();
 
 /// Queries on a tile that rasterizeTile left in `scratch` (the occlusion buffer keeps one per
 /// tile). Its uniform states refer to the frame's set-up triangles, which must still be alive.
