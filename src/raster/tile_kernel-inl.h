@@ -44,6 +44,7 @@ namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
 using hsr::stream::HWY_NAMESPACE::StreamCopy;
+using hsr::stream::HWY_NAMESPACE::StreamFill;
 
 using D = hn::CappedTag<double, kBlockSize>;  // at most one block row per vector
 using V = hn::Vec<D>;
@@ -608,6 +609,15 @@ HWY_INLINE V EyeDepthOfStored(V q, const DepthSetup& depth) {
   }
 }
 
+// The bits of a 4-byte value.
+template <class T>
+HWY_INLINE uint32_t Bits32(T v) {
+  static_assert(sizeof(T) == 4);
+  uint32_t bits;
+  std::memcpy(&bits, &v, 4);
+  return bits;
+}
+
 // Depth only: the eye depth of every stored value that left the clear value, +inf elsewhere
 // (every pixel of the tile is written).
 template <DepthStorage S, DepthMapping M>
@@ -623,14 +633,16 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
                                                       : MappedPlanes{};
   uint64_t covered = 0;
   HWY_ALIGN float row[kTileSize];  // a row of the tile, then streamed into the frame (core/stream-inl.h)
+  if (s.state == TileState::Clear) {  // +inf, straight into the frame
+    for (int y = rowBegin; y < std::min(rowEnd, tf.h); ++y)
+      StreamFill(reinterpret_cast<uint32_t*>(frame.depth.data() + frame.index(tf.x0, tf.y0 + y)),
+                 Bits32(std::numeric_limits<float>::infinity()), size_t(tf.w));
+    return 0;
+  }
   for (int y = rowBegin; y < std::min(rowEnd, tf.h); ++y) {
     for (size_t k = 0; k < size_t(tf.w); k += N) {
       const size_t count = std::min(N, size_t(tf.w) - k);
       float* out = row + k;
-      if (s.state == TileState::Clear) {
-        hn::Store(hn::DemoteTo(df, infinity), df, out);
-        continue;
-      }
       const int b = (y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize;  // lanes within one block
       const V X = hn::Iota(d, double(tf.x0 + int(k)) + 0.5);
       const double Y = double(tf.y0 + y) + 0.5;
@@ -656,13 +668,6 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
 // A pixel's two cells after prepareResolve (tiled.hpp): depth = (float eye depth, int32 face
 // id), triangle = (int32 triangle id, Rgba8 colour), the first of each pair in the low half.
 HWY_INLINE uint64_t PackCell(uint32_t low, uint32_t high) { return uint64_t(high) << 32 | low; }
-template <class T>
-HWY_INLINE uint32_t Bits32(T v) {
-  static_assert(sizeof(T) == 4);
-  uint32_t bits;
-  std::memcpy(&bits, &v, 4);
-  return bits;
-}
 
 // The colour of a set-up triangle for the frame (FrameOutputs::All), remembering the last one:
 // neighbouring pixels mostly share their triangle, and back faces are shaded here.
@@ -770,6 +775,16 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
   const auto noId = hn::Set(du32, Bits32(int32_t(-1)));
   uint64_t covered = 0;
   HWY_ALIGN uint32_t rows[4][kTileSize];  // a row of the tile per output, then streamed (core/stream-inl.h)
+  if (s.state == TileState::Clear) {  // the background, straight into the frame
+    for (int y = rowBegin; y < std::min(rowEnd, h); ++y) {
+      const size_t at = frame.index(x0, y0 + y);
+      StreamFill(reinterpret_cast<uint32_t*>(frame.depth.data() + at), Bits32(std::numeric_limits<float>::infinity()), size_t(w));
+      StreamFill(reinterpret_cast<uint32_t*>(frame.faceId.data() + at), Bits32(int32_t(-1)), size_t(w));
+      StreamFill(reinterpret_cast<uint32_t*>(frame.triangleId.data() + at), Bits32(int32_t(-1)), size_t(w));
+      if constexpr (kColor) StreamFill(reinterpret_cast<uint32_t*>(frame.color.data() + at), backgroundBits, size_t(w));
+    }
+    return 0;
+  }
   for (int y = rowBegin; y < std::min(rowEnd, h); ++y) {
     const double Y = double(y0 + y) + 0.5;
     for (size_t k = 0; k < size_t(w); k += N) {
