@@ -16,7 +16,7 @@ namespace hsr {
 
 /// The allocator of Frame's buffers: memory aligned to a 64-byte cache line, so that the rows of
 /// an image whose width is a multiple of 16 pixels start on a cache line and the tiled rasterizer
-/// can write whole lines with streaming (non-temporal) stores. A std::allocator otherwise.
+/// can write whole lines with streaming (non-temporal) stores. Otherwise as std::allocator.
 template <class T>
 struct CacheLineAllocator {
   using value_type = T;

@@ -37,7 +37,8 @@ template <class Source>
 HWY_INLINE void StreamWrite(uint32_t* HWY_RESTRICT dst, size_t n, const Source& source) {
   const hn::CappedTag<uint32_t, kLineValues> d;  // a divisor of a line
   const size_t L = hn::Lanes(d);
-  size_t i = std::min(n, (kLineValues - reinterpret_cast<uintptr_t>(dst) / sizeof(uint32_t) % kLineValues) % kLineValues);
+  const size_t intoLine = reinterpret_cast<uintptr_t>(dst) / sizeof(uint32_t) % kLineValues;
+  size_t i = std::min(n, (kLineValues - intoLine) % kLineValues);  // values before dst's next line
   for (size_t j = 0; j < i; ++j) dst[j] = source.at(j);
   for (; i + kLineValues <= n; i += kLineValues)
     for (size_t k = 0; k < kLineValues; k += L) hn::Stream(source.vec(d, i + k), d, dst + i + k);

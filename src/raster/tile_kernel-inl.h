@@ -632,13 +632,13 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
                                                                      job.depth.far, job.depth.orthographic)
                                                       : MappedPlanes{};
   uint64_t covered = 0;
-  HWY_ALIGN float row[kTileSize];  // a row of the tile, then streamed into the frame (core/stream-inl.h)
   if (s.state == TileState::Clear) {  // +inf, straight into the frame
     for (int y = rowBegin; y < std::min(rowEnd, tf.h); ++y)
       StreamFill(reinterpret_cast<uint32_t*>(frame.depth.data() + frame.index(tf.x0, tf.y0 + y)),
                  Bits32(std::numeric_limits<float>::infinity()), size_t(tf.w));
     return 0;
   }
+  HWY_ALIGN float row[kTileSize];  // a row of the tile, then streamed into the frame (core/stream-inl.h)
   for (int y = rowBegin; y < std::min(rowEnd, tf.h); ++y) {
     for (size_t k = 0; k < size_t(tf.w); k += N) {
       const size_t count = std::min(N, size_t(tf.w) - k);
@@ -774,17 +774,18 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
   const uint64_t tileKey = s.state == TileState::Plane ? s.planeKey : 0;
   const auto noId = hn::Set(du32, Bits32(int32_t(-1)));
   uint64_t covered = 0;
-  HWY_ALIGN uint32_t rows[4][kTileSize];  // a row of the tile per output, then streamed (core/stream-inl.h)
   if (s.state == TileState::Clear) {  // the background, straight into the frame
+    const uint32_t infinityBits = Bits32(std::numeric_limits<float>::infinity()), noIdBits = Bits32(int32_t(-1));
     for (int y = rowBegin; y < std::min(rowEnd, h); ++y) {
       const size_t at = frame.index(x0, y0 + y);
-      StreamFill(reinterpret_cast<uint32_t*>(frame.depth.data() + at), Bits32(std::numeric_limits<float>::infinity()), size_t(w));
-      StreamFill(reinterpret_cast<uint32_t*>(frame.faceId.data() + at), Bits32(int32_t(-1)), size_t(w));
-      StreamFill(reinterpret_cast<uint32_t*>(frame.triangleId.data() + at), Bits32(int32_t(-1)), size_t(w));
+      StreamFill(reinterpret_cast<uint32_t*>(frame.depth.data() + at), infinityBits, size_t(w));
+      StreamFill(reinterpret_cast<uint32_t*>(frame.faceId.data() + at), noIdBits, size_t(w));
+      StreamFill(reinterpret_cast<uint32_t*>(frame.triangleId.data() + at), noIdBits, size_t(w));
       if constexpr (kColor) StreamFill(reinterpret_cast<uint32_t*>(frame.color.data() + at), backgroundBits, size_t(w));
     }
     return 0;
   }
+  HWY_ALIGN uint32_t rows[4][kTileSize];  // a row of the tile per output, then streamed (core/stream-inl.h)
   for (int y = rowBegin; y < std::min(rowEnd, h); ++y) {
     const double Y = double(y0 + y) + 0.5;
     for (size_t k = 0; k < size_t(w); k += N) {
@@ -828,7 +829,8 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
     StreamCopy(reinterpret_cast<uint32_t*>(frame.depth.data() + at), rows[0], size_t(w));
     StreamCopy(reinterpret_cast<uint32_t*>(frame.faceId.data() + at), rows[1], size_t(w));
     StreamCopy(reinterpret_cast<uint32_t*>(frame.triangleId.data() + at), rows[2], size_t(w));
-    if constexpr (kColor) StreamCopy(reinterpret_cast<uint32_t*>(frame.color.data() + at), rows[3], size_t(w));
+    if constexpr (kColor)
+      StreamCopy(reinterpret_cast<uint32_t*>(frame.color.data() + at), rows[3], size_t(w));
   }
   return covered;
 }
