@@ -15,6 +15,8 @@
 namespace hsr {
 namespace {
 
+using test::firstDifference;
+
 std::vector<DepthFormat> everyFormat() {
   std::vector<DepthFormat> formats;
   for (const char* s : {"u16", "u24", "u32", "f32"})
@@ -40,13 +42,6 @@ Frame referenceDepth(const Scene& scene, const Camera& cam, DepthFormat format) 
   o.outputs = FrameOutputs::DepthOnly;
   o.threads = 1;
   return render(scene, cam, o);
-}
-
-long firstDifference(const FrameBuffer<float>& a, const FrameBuffer<float>& b) {
-  if (a.size() != b.size()) return 0;
-  for (size_t i = 0; i < a.size(); ++i)
-    if (std::memcmp(&a[i], &b[i], sizeof(float)) != 0) return long(i);
-  return -1;
 }
 
 // "stored value a is nearer than b" in the format's direction.

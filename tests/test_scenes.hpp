@@ -2,9 +2,19 @@
 #pragma once
 #include <hsr/hsr.hpp>
 
+#include <cstring>
 #include <random>
 
 namespace hsr::test {
+
+/// First pixel where two frame buffers differ bitwise, or -1 (0 when their sizes differ).
+template <class T>
+long firstDifference(const FrameBuffer<T>& a, const FrameBuffer<T>& b) {
+  if (a.size() != b.size()) return 0;
+  for (size_t i = 0; i < a.size(); ++i)
+    if (std::memcmp(&a[i], &b[i], sizeof(T)) != 0) return long(i);
+  return -1;
+}
 
 /// Axis-aligned box [lo, hi] as 6 quads, appended to `s` (call s.finalize() afterwards).
 inline void addBox(Scene& s, dvec3 lo, dvec3 hi, Rgba8 color) {

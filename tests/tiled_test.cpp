@@ -27,6 +27,8 @@
 namespace hsr {
 namespace {
 
+using test::firstDifference;
+
 const char* kStorages[] = {"u16", "u24", "u32", "f32"};
 const char* kMappings[] = {"z", "reversed", "inv", "linear"};
 
@@ -118,15 +120,6 @@ Frame renderWith(const Scene& scene, const Camera& cam, DepthFormat format, Rast
   o.threads = threads;
   o.outputs = outputs;
   return render(scene, cam, o);
-}
-
-// First pixel where two per-pixel vectors differ bitwise, or -1.
-template <class T>
-long firstDifference(const FrameBuffer<T>& a, const FrameBuffer<T>& b) {
-  if (a.size() != b.size()) return 0;
-  for (size_t i = 0; i < a.size(); ++i)
-    if (std::memcmp(&a[i], &b[i], sizeof(T)) != 0) return long(i);
-  return -1;
 }
 
 // Expects `fast` bit-identical to `reference`; returns false (after one failure message with a

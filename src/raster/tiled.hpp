@@ -315,9 +315,9 @@ void prepareResolve(const Bins& bins, int tile, FrameOutputs outputs, const Tria
 /// the stored value; the background (-1, +inf, `background`) where nothing was drawn. The frame's
 /// buffers that `outputs` does not ask for are not touched. Only the tile's rows [rowBegin,
 /// rowEnd) (tile-local): a caller resolving several tiles writes the frame band by band across
-/// them — row-major frame buffers written one 64x64 tile at a time are 3-6x slower to write
-/// (64 rows x 4 buffers of scattered 256-byte pieces defeat the hardware prefetchers and TLB),
-/// measured on this project's 2-core VM. With ids, the tile must have been through
+/// them — row-major frame buffers written one 64x64 tile at a time with ordinary stores were
+/// 3-6x slower to write (64 rows x 4 buffers of scattered 256-byte pieces defeat the hardware
+/// prefetchers and TLB), measured on this project's 2-core VM. With ids, the tile must have been through
 /// prepareResolve() (std::logic_error otherwise). Returns the number of covered pixels.
 /// The frame's whole cache lines are written with streaming stores: a thread that called
 /// resolveTile calls finishResolves() before another thread reads the frame.
