@@ -123,7 +123,7 @@ std::vector<std::array<dvec2, 3>> randomTriangles(int count, uint64_t seed) {
 TEST(Raster, CoverageMatchesBruteForceOn10000Triangles) {
   auto tris = randomTriangles(14000, 12345);
   const double depth[3] = {1, 2, 3};
-  int drawn = 0, empty = 0;
+  int drawn = 0, empty = 0, listed = 0;
   for (size_t n = 0; n < tris.size(); ++n) {
     SetupTriangle t;
     FrontEndOutput counters;
@@ -137,6 +137,17 @@ TEST(Raster, CoverageMatchesBruteForceOn10000Triangles) {
       continue;
     }
     ++drawn;
+    // Set-up's list of covered centres (small boxes only): the reference's coverage of the box.
+    const int boxW = t.maxX - t.minX + 1, boxH = t.maxY - t.minY + 1;
+    ASSERT_EQ(t.coverage != 0, boxW <= kCoverageBox && boxH <= kCoverageBox) << "triangle " << n;
+    if (t.coverage) {
+      ++listed;
+      for (int y = 0; y < kCoverageBox; ++y)
+        for (int x = 0; x < kCoverageBox; ++x) {
+          const bool in = x < boxW && y < boxH && insideReference(t, t.minX + x, t.minY + y);
+          ASSERT_EQ(in, (t.coverage >> (y * kCoverageBox + x) & 1) != 0) << "triangle " << n << " " << x << "," << y;
+        }
+    }
     for (bool scan : {false, true}) {
       Coverage c = rasterize(t, scan);
       size_t expected = 0;
@@ -152,6 +163,7 @@ TEST(Raster, CoverageMatchesBruteForceOn10000Triangles) {
   }
   EXPECT_GE(drawn, 10000);  // at least 10,000 triangles reached the rasterizers
   EXPECT_GE(empty, 100);     // and some were dropped for covering no pixel centre
+  EXPECT_GE(listed, 100);    // and some came with their covered centres listed
 }
 
 TEST(Raster, ScanlineAndHalfSpaceAgreeOnDepth) {
@@ -312,6 +324,7 @@ TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
     if (kind == 1) p[1] = p[0] + dvec2(0.3, 0.2), p[2] = p[0] + dvec2(-0.2, 0.4);  // tiny
     if (kind == 2) p[2] = p[1];                                                 // degenerate
     if (kind == 3) p[2] = p[0] + (p[1] - p[0]) * 0.5 + dvec2(0, 0.01);          // sliver
+    if (kind == 4) p[1] = p[0] + dvec2(2.7, 0.9), p[2] = p[0] + dvec2(0.8, 3.1);   // small: covered centres listed
   });
   const auto& [vertices, index, tri, face] = soup;
   const Camera cam = pixelCamera(100, 80);  // (boxes of 64 x 64 pixels fit: counters.large)
@@ -321,6 +334,7 @@ TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
     ++targets;
     for (Cull cull : {Cull::None, Cull::Back, Cull::Front}) {
       FrontEndCounters scalarCounts, batchCounts;
+      size_t listed = 0;
       std::vector<SetupTriangle> scalar, batch(tri.size());
       for (size_t i = 0; i < tri.size(); ++i) {
         const ProjectedVertex v[3] = {vertices[index[0][i]], vertices[index[1][i]], vertices[index[2][i]]};
@@ -336,6 +350,8 @@ TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
         scalar[i].color = batch[i].color = Rgba8{};  // shaded by the caller
         ASSERT_EQ(std::memcmp(&scalar[i], &batch[i], offsetof(SetupTriangle, frontFacing)), 0) << what << " " << i;
         ASSERT_EQ(scalar[i].frontFacing, batch[i].frontFacing) << what << " " << i;
+        ASSERT_EQ(scalar[i].coverage, batch[i].coverage) << what << " " << i;
+        listed += scalar[i].coverage != 0;
       }
       EXPECT_EQ(scalarCounts.degenerate, batchCounts.degenerate) << what;
       EXPECT_EQ(scalarCounts.culledBackface, batchCounts.culledBackface) << what;
@@ -347,6 +363,7 @@ TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
         EXPECT_GT(scalarCounts.empty, 10u);
         EXPECT_GT(scalarCounts.large, 10u);
         EXPECT_GT(scalar.size(), 1000u);
+        EXPECT_GT(listed, 200u);
       }
     }
   }

@@ -45,11 +45,20 @@ struct SetupTriangle {
   uint32_t triangle;               // index into Scene::triangles
   uint32_t face;
   bool frontFacing;                // counter-clockwise as seen by the camera
+  // A box of at most kCoverageBox x kCoverageBox pixels (most triangles of a dense mesh): the
+  // pixel centres it covers, bit 4 (y - minY) + (x - minX), as the edge functions decide (never
+  // 0: such a triangle is dropped); 0 for a larger box. Lets the tiled kernel skip its edge set-up.
+  uint16_t coverage = 0;
   Rgba8 color;  // shaded (core/shading.hpp) when the frame keeps colour and frontFacing (a
                 // back face is mostly hidden: the resolve shades the few that show)
 
   double eyeDepth(double px, double py) const { return depthNum.at(px, py) / depthDen.at(px, py); }
 };
+
+/// Side of the largest pixel box whose covered centres set-up lists (SetupTriangle::coverage).
+inline constexpr int kCoverageBox = 4;
+static_assert(kCoverageBox * kCoverageBox <= 16, "SetupTriangle::coverage holds one bit per centre");
+static_assert(sizeof(SetupTriangle) == 96, "a set-up triangle is one and a half cache lines");
 
 /// The colour of a set-up triangle, one rule for every rasterizer: the front end shades front
 /// faces (SetupTriangle::color); a back face, mostly hidden, is shaded only when it shows.

@@ -194,11 +194,12 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     const M offScreen = hn::Or(hn::Or(hn::Lt(maxX, zero), hn::Lt(maxY, zero)),
                                hn::Or(hn::Gt(minX, hn::Mul(hn::Set(d, double(cam.width)), one)),
                                       hn::Gt(minY, hn::Mul(hn::Set(d, double(cam.height)), one))));
-    // Small boxes (at most 4 centres): does the triangle cover any of them? The box's centres
-    // are at offsets (0..3, 0), (0, 1..3) and (1, 1) from its corner, those inside it count.
+    // Small boxes (at most kCoverageBox centres each way): the centres the triangle covers, one
+    // bit each (SetupTriangle::coverage), centre (ox, oy) of the box counting 2^(4 oy + ox).
     const V bw = hn::Add(hn::Sub(bx1, bx0), hn::Set(d, 1.0)), bh = hn::Add(hn::Sub(by1, by0), hn::Set(d, 1.0));
-    const M small = hn::AndNot(noBox, hn::Le(hn::Mul(bw, bh), hn::Set(d, 4.0)));
-    M covers = hn::FirstN(d, 0);
+    const V boxLimit = hn::Set(d, double(kCoverageBox));
+    const M small = hn::AndNot(noBox, hn::And(hn::Le(bw, boxLimit), hn::Le(bh, boxLimit)));
+    V coverage = zero;
     if (!hn::AllFalse(d, small)) {
       V edx[3], edy[3], ebias[3];
       for (int i = 0; i < 3; ++i) {
@@ -210,24 +211,29 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
       }
       // Each edge function at the corner centre, then stepped by whole pixels (A = -dy, B = dx
       // per 1/256 pixel): every value is an integer below 2^53, exact in any order.
-      static constexpr int kOffsets[8][2] = {{0, 0}, {1, 0}, {2, 0}, {3, 0}, {0, 1}, {0, 2}, {0, 3}, {1, 1}};
       const V px = hn::Add(hn::Mul(bx0, one), half), py = hn::Add(hn::Mul(by0, one), half);
-      V corner[3], stepA[3], stepB[3];
+      V row[3], stepA[3], stepB[3];
       for (int i = 0; i < 3; ++i) {
-        corner[i] = hn::Sub(hn::Mul(edx[i], hn::Sub(py, Y[i])), hn::Mul(edy[i], hn::Sub(px, X[i])));
+        row[i] = hn::Sub(hn::Mul(edx[i], hn::Sub(py, Y[i])), hn::Mul(edy[i], hn::Sub(px, X[i])));
         stepA[i] = hn::Mul(hn::Neg(edy[i]), one);
         stepB[i] = hn::Mul(edx[i], one);
       }
-      for (const auto& o : kOffsets) {
-        const V ox = hn::Set(d, double(o[0])), oy = hn::Set(d, double(o[1]));
-        M inside = hn::And(hn::Lt(ox, bw), hn::Lt(oy, bh));
-        for (int i = 0; i < 3; ++i) {
-          const V e = hn::Add(hn::Add(corner[i], hn::Mul(ox, stepA[i])), hn::Mul(oy, stepB[i]));
-          inside = hn::And(inside, hn::Ge(e, ebias[i]));
+      for (int oy = 0; oy < kCoverageBox; ++oy) {
+        V e[3] = {row[0], row[1], row[2]};
+        const M rowIn = hn::Lt(hn::Set(d, double(oy)), bh);
+        for (int ox = 0; ox < kCoverageBox; ++ox) {
+          M inside = hn::And(rowIn, hn::Lt(hn::Set(d, double(ox)), bw));
+          for (int i = 0; i < 3; ++i) {
+            inside = hn::And(inside, hn::Ge(e[i], ebias[i]));
+            e[i] = hn::Add(e[i], stepA[i]);
+          }
+          coverage = hn::Add(coverage, hn::IfThenElseZero(inside, hn::Set(d, double(1 << (oy * kCoverageBox + ox)))));
         }
-        covers = hn::Or(covers, inside);
+        for (int i = 0; i < 3; ++i) row[i] = hn::Add(row[i], stepB[i]);
       }
+      coverage = hn::IfThenElseZero(small, coverage);
     }
+    const M covers = hn::Gt(coverage, zero);
     const M empty = hn::AndNot(covers, small);
     // Depth planes through the unsnapped positions unless that triangle is (nearly) degenerate.
     const V exactArea = hn::Sub(hn::Mul(hn::Sub(sx[1], sx[0]), hn::Sub(sy[2], sy[0])),
@@ -270,7 +276,7 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     const V largeBox = hn::Set(d, double(kLargeBoxPixels));
     counters.large += hn::CountTrue(d, hn::And(survivors, hn::And(hn::Ge(bw, largeBox), hn::Ge(bh, largeBox))));
     const V nearestV = depth ? NearestStored(*depth, {na, nb, nc}, {da, db, dc}, px, py) : zero;
-    HWY_ALIGN double lane[18][kSetupBatch];
+    HWY_ALIGN double lane[19][kSetupBatch];
     // (One store per field: a braced list of the vectors would be copied whole first.)
     for (int k = 0; k < 3; ++k) {
       hn::Store(X[k], d, lane[k]);
@@ -281,6 +287,7 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     hn::Store(da, d, lane[13]), hn::Store(db, d, lane[14]), hn::Store(dc, d, lane[15]);
     hn::Store(nearestV, d, lane[16]);
     hn::Store(hn::VecFromMask(d, front), d, lane[17]);
+    hn::Store(coverage, d, lane[18]);
     // Deferred: back faces whose box lies in one kDeferTile square.
     M defer = hn::FirstN(d, 0);
     if (deferred) {
@@ -320,6 +327,7 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
       t.triangle = triIndex[first + j];
       t.face = face[first + j];
       t.frontFacing = lane[17][j] != 0;
+      t.coverage = uint16_t(lane[18][j]);
     }
   }
   if (deferredCount) *deferredCount = deferredWritten;

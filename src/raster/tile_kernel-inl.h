@@ -371,8 +371,69 @@ void RasterizeTileT(const TileJob& job) {
       ++count.culledTiles;
       continue;
     }
-    const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
     const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, n, f, ortho, reciprocal);
+
+    // The fragment at tile-local pixel (x, y) (pRow = m.p.b * Y, qRow = m.q.b * Y for its row's
+    // centre Y), pixel by pixel in scalar code, with the same operations as the lanes below.
+    auto drawPixel = [&](int x, int y, double pRow, double qRow) {
+      const size_t at = size_t(y) * kTileSize + size_t(x);
+      const double stored = s.depth[at];
+      if (Beaten<M, kIds>(qNear, stored)) return;
+      const double z = fragmentStored<S>(m, double(x) + (double(x0) + 0.5), pRow, qRow);
+      ++tests;
+      if (storedNearer<M>(z, stored) || (kIds && z == stored && key < s.triangle[at])) {
+        ++writes;
+        s.depth[at] = z;
+        if constexpr (kIds) s.triangle[at] = key;
+        const int b = (y / kBlockSize) * kBlocksX + x / kBlockSize;
+        dirtyBlocks |= uint64_t(1) << b;
+        if (storedNearer<M>(z, s.blockNear[b])) s.blockNear[b] = z;
+        if (storedNearer<M>(z, s.tileNear)) s.tileNear = z;
+      }
+    };
+    // A small triangle's box in the tile (tile-local, inclusive): whether it is behind everything
+    // stored in the (1 to 4) blocks the box touches (the blocks' farthest values may be stale,
+    // still bounds); if not, those blocks are made ready for drawing pixel by pixel. (The tile
+    // is turned to state Pixels first.)
+    auto smallBeaten = [&](int bx0, int bx1, int by0, int by1) {
+      if (s.state != TileState::Pixels) {  // (the blocks' bounds are kept in state Pixels)
+        Materialize<S, M, kIds>(job, tf);
+        dirtyBlocks = 0;
+      }
+      bool beaten = true;
+      for (int by = by0 / kBlockSize; by <= by1 / kBlockSize; ++by)
+        for (int bx = bx0 / kBlockSize; bx <= bx1 / kBlockSize; ++bx)
+          beaten &= Beaten<M, kIds>(qNear, s.blockFar[by * kBlocksX + bx]);
+      if (beaten) {
+        if constexpr (kCountBlocks) ++count.blocksCulled;
+        return true;
+      }
+      for (int by = by0 / kBlockSize; by <= by1 / kBlockSize; ++by)
+        for (int bx = bx0 / kBlockSize; bx <= bx1 / kBlockSize; ++bx)
+          if (Lazy(s, by * kBlocksX + bx)) MaterializeBlock<S, M, kIds>(job, tf, by * kBlocksX + bx);
+      return false;
+    };
+
+    // Triangles whose covered centres set-up listed (SetupTriangle::coverage: a box of at most
+    // 4x4 pixels): no edge functions, only the covered pixels in the tile are visited.
+    if (t.coverage) {
+      const int ox = t.minX - x0, oy = t.minY - y0;  // the box's corner, tile-local (maybe outside)
+      const int cx0 = std::max(-ox, 0), cx1 = std::min(w - 1 - ox, kCoverageBox - 1);
+      const int cy0 = std::max(-oy, 0), cy1 = std::min(h - 1 - oy, kCoverageBox - 1);
+      const unsigned columns = ((2u << cx1) - 1) & ~((1u << cx0) - 1);
+      const unsigned rows = ((1u << (kCoverageBox * (cy1 + 1))) - 1) & ~((1u << (kCoverageBox * cy0)) - 1);
+      const unsigned bits = t.coverage & rows & (columns * 0x1111u);
+      if (!bits || smallBeaten(ox + cx0, ox + cx1, oy + cy0, oy + cy1)) continue;
+      for (unsigned left = bits; left; left &= left - 1) {
+        const int bit = int(hwy::Num0BitsBelowLS1Bit_Nonzero32(left));
+        const int y = oy + bit / kCoverageBox;
+        const double Y = double(y0 + y) + 0.5;
+        drawPixel(ox + bit % kCoverageBox, y, m.p.b * Y, m.q.b * Y);
+      }
+      continue;
+    }
+
+    const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
 
     // Whole tile: the triangle covers every pixel centre of the tile (its four corner centres;
     // coverage is convex) and its farthest value is nearer than the nearest stored: it wins
@@ -406,51 +467,17 @@ void RasterizeTileT(const TileJob& job) {
     // The triangle's pixel box within the tile, tile-local and inclusive.
     const int rx0 = std::max(t.minX - x0, 0), rx1 = std::min(t.maxX - x0, w - 1);
     const int ry0 = std::max(t.minY - y0, 0), ry1 = std::min(t.maxY - y0, h - 1);
-    V laneE[3], biasV[3];
-    for (int i = 0; i < 3; ++i) {
-      laneE[i] = hn::Mul(lane, hn::Set(d, double(e[i].stepX())));  // lane j: j * stepX, exact
-      biasV[i] = hn::Set(d, double(e[i].bias));
-    }
-
-    // Small triangles (a box of at most kSmallPixels centres, most of a million-triangle
-    // mesh): pixel by pixel in scalar code, with the same operations as the lanes below.
+    // Small triangles (a box of at most kSmallPixels centres in the tile) without a coverage
+    // list: pixel by pixel.
     if ((rx1 - rx0 + 1) * (ry1 - ry0 + 1) <= kSmallPixels) {
-      // Behind everything stored in the (1 to 4) blocks its box touches: nothing to do (the
-      // blocks' farthest values may be stale, still bounds).
-      bool beaten = true;
-      for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
-        for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx)
-          beaten &= Beaten<M, kIds>(qNear, s.blockFar[by * kBlocksX + bx]);
-      if (beaten) {
-        if constexpr (kCountBlocks) ++count.blocksCulled;
-        continue;
-      }
-      for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
-        for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx)
-          if (Lazy(s, by * kBlocksX + bx)) MaterializeBlock<S, M, kIds>(job, tf, by * kBlocksX + bx);
+      if (smallBeaten(rx0, rx1, ry0, ry1)) continue;
       int64_t rowE[3];
       for (int i = 0; i < 3; ++i) rowE[i] = e[i].at(centerFixed(x0 + rx0), centerFixed(y0 + ry0));
       for (int y = ry0; y <= ry1; ++y) {
         const double Y = double(y0 + y) + 0.5, pRow = m.p.b * Y, qRow = m.q.b * Y;
         int64_t E[3] = {rowE[0], rowE[1], rowE[2]};
         for (int x = rx0; x <= rx1; ++x) {
-          if (E[0] >= e[0].bias && E[1] >= e[1].bias && E[2] >= e[2].bias) {
-            const size_t at = size_t(y) * kTileSize + size_t(x);
-            const double stored = s.depth[at];
-            if (!Beaten<M, kIds>(qNear, stored)) {
-              const double z = fragmentStored<S>(m, double(x) + (double(x0) + 0.5), pRow, qRow);
-              ++tests;
-              if (storedNearer<M>(z, stored) || (kIds && z == stored && key < s.triangle[at])) {
-                ++writes;
-                s.depth[at] = z;
-                if constexpr (kIds) s.triangle[at] = key;
-                const int b = (y / kBlockSize) * kBlocksX + x / kBlockSize;
-                dirtyBlocks |= uint64_t(1) << b;
-                if (storedNearer<M>(z, s.blockNear[b])) s.blockNear[b] = z;
-                if (storedNearer<M>(z, s.tileNear)) s.tileNear = z;
-              }
-            }
-          }
+          if (E[0] >= e[0].bias && E[1] >= e[1].bias && E[2] >= e[2].bias) drawPixel(x, y, pRow, qRow);
           for (int i = 0; i < 3; ++i) E[i] += e[i].stepX();
         }
         for (int i = 0; i < 3; ++i) rowE[i] += e[i].stepY();
@@ -458,6 +485,11 @@ void RasterizeTileT(const TileJob& job) {
       continue;
     }
 
+    V laneE[3], biasV[3];
+    for (int i = 0; i < 3; ++i) {
+      laneE[i] = hn::Mul(lane, hn::Set(d, double(e[i].stepX())));  // lane j: j * stepX, exact
+      biasV[i] = hn::Set(d, double(e[i].bias));
+    }
     const V qNearV = hn::Set(d, qNear);
     const auto idV = hn::Set(du, key);
     // A triangle parallel to the image plane has both planes constant (a = b = 0): a*X and
