@@ -352,7 +352,9 @@ void RasterizeTileT(const TileJob& job) {
     const SetupTriangle& t = bins.triangle(order[item].key);
     // The records are scattered over the chunks: fetch ahead those of triangles the tile's
     // bound does not reject already (nearest first, most hidden ones are rejected unread).
-    constexpr size_t kAhead = 6;
+    // (12 ahead rather than 6 since small triangles come with their coverage listed: sphere
+    // 0.99x the time; 24: no better.)
+    constexpr size_t kAhead = 12;
     if (item + kAhead < end && !Beaten<M, kIds>(order[item + kAhead].nearest, s.tileFar)) {
       const SetupTriangle* ahead = &bins.triangle(order[item + kAhead].key);
       hwy::Prefetch(ahead);
