@@ -5,7 +5,9 @@
 //
 // One vector holds up to 8 double lanes, one row of an 8x8 block (AVX-512: one vector per row,
 // AVX2: two, SSE4: four, scalar: eight). Every lane repeats the reference's arithmetic exactly:
-//  - coverage: the integer edge functions of raster/edge.hpp, exact in double (|E| < 2^50);
+//  - coverage: the integer edge functions of raster/edge.hpp, exact in double (|E| < 2^50); for
+//    a triangle with a box of at most 4x4 pixels, set-up's list of the centres those functions
+//    cover (SetupTriangle::coverage);
 //  - depth: ((a*X + b*Y) + c) for the planes P and Q of raster/fragment_depth.hpp, their
 //    quotient (none when Q is 1: MappedPlanes::affine), std::clamp and quantizeDepth<S> — the
 //    same IEEE operations in the same order as fragmentStored<S>, which the reference
