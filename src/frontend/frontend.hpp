@@ -46,8 +46,9 @@ struct SetupTriangle {
   uint32_t face;
   bool frontFacing;                // counter-clockwise as seen by the camera
   // A box of at most kCoverageBox x kCoverageBox pixels (most triangles of a dense mesh): the
-  // pixel centres it covers, bit 4 (y - minY) + (x - minX), as the edge functions decide (never
-  // 0: such a triangle is dropped); 0 for a larger box. Lets the tiled kernel skip its edge set-up.
+  // pixel centres it covers, bit kCoverageBox (y - minY) + (x - minX), as the edge functions
+  // decide (never 0: such a triangle is dropped); 0 for a larger box. Lets the tiled kernel skip
+  // its edge set-up.
   uint16_t coverage = 0;
   Rgba8 color;  // shaded (core/shading.hpp) when the frame keeps colour and frontFacing (a
                 // back face is mostly hidden: the resolve shades the few that show)
