@@ -107,7 +107,7 @@ void BM_RasterTiles(benchmark::State& state) {
   state.counters["blocks_whole"] = double(counters.blocksWhole);
 }
 BENCHMARK(BM_RasterTiles)
-    ->ArgsProduct({{0, 1, 3}, benchmark::CreateDenseRange(0, 15, 1)})
+    ->ArgsProduct({{0, 1, 3, 4}, benchmark::CreateDenseRange(0, 15, 1)})
     ->Unit(benchmark::kMillisecond);
 
 // Whole frames through render(): scene range(0), raster range(1) (0 tiled, 1 halfspace),

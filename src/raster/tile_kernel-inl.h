@@ -527,23 +527,28 @@ void RasterizeTileT(const TileJob& job) {
           continue;
         }
         if constexpr (kCountBlocks) ++(full ? count.blocksFull : count.blocksPartial);
-        // Whole block: a triangle covering every pixel centre of the block (in the image), in
-        // front of everything stored there: the block becomes the triangle's plane, in O(1).
-        // Parallel to the image plane, every fragment stores zConstant's bits; sloped, the
-        // block's bounds come from storedRange over its corner centres — worth it only over a
-        // block still cleared, and with ids (the resolve's preparation skips the block too):
-        // measured over every block, the city was slower; depth only, cubes were.
+        // A block the triangle covers whole (every pixel centre of the block, in the image):
+        // the triangle's bounds over its corner centres (storedRange; every covered value lies
+        // within them). Behind everything stored there: the block is skipped. In front of it
+        // all: the block becomes the triangle's plane, in O(1) — parallel to the image plane
+        // (every fragment stores zConstant's bits) over any block; sloped, over a block still
+        // uniform (cleared, or another plane not yet written out) and with ids (the resolve's
+        // preparation skips the block too): measured over blocks held pixel by pixel, the city
+        // was slower; depth only, cubes were.
         const int blockX1 = std::min(bx * kBlockSize + kBlockSize - 1, w - 1);
         const int blockY1 = std::min(by * kBlockSize + kBlockSize - 1, h - 1);
-        if (full && cx0 == bx * kBlockSize && cy0 == by * kBlockSize && cx1 == blockX1 && cy1 == blockY1 &&
-            (constantDepth || (kIds && s.blockClear[b]))) {
+        if (full && cx0 == bx * kBlockSize && cy0 == by * kBlockSize && cx1 == blockX1 && cy1 == blockY1) {
           StoredRange r{hn::GetLane(zConstant), hn::GetLane(zConstant)};
           if (!constantDepth) {
             const double left = x0 + cx0 + 0.5, right = x0 + cx1 + 0.5, top = y0 + cy0 + 0.5, bottom = y0 + cy1 + 0.5;
             const double cornersX[4] = {left, right, right, left}, cornersY[4] = {top, top, bottom, bottom};
             r = storedRange<S, M>(m, cornersX, cornersY, 4);
           }
-          if (storedNearer<M>(r.farthest, s.blockNear[b])) {
+          if (Beaten<M, kIds>(r.nearest, s.blockFar[b])) {
+            if constexpr (kCountBlocks) ++count.blocksCulled;
+            continue;
+          }
+          if ((constantDepth || (kIds && Lazy(s, b))) && storedNearer<M>(r.farthest, s.blockNear[b])) {
             const uint64_t cells = uint64_t(cx1 - cx0 + 1) * uint64_t(cy1 - cy0 + 1);
             tests += cells;
             writes += cells;
