@@ -160,6 +160,7 @@ struct ViewFlags {
   std::string scene, cameraFile, size = "1280x720", depthFormat, background;
   std::string raster = "tiled", cull = "none", shading = "lambert";
   bool depthOnly = false;
+  std::string outputs;  // --outputs, empty: all
   std::string eye, target, up;
   double fov = 0, near = 0, far = 0, ortho = 0;
   CLI::Option *fovFlag = nullptr, *nearFlag = nullptr, *farFlag = nullptr, *orthoFlag = nullptr;
@@ -187,8 +188,14 @@ struct ViewFlags {
     cmd.add_option("--raster", raster, "Triangle rasterizer (tiled: fast, bit-identical to halfspace)")
         ->check(oneOf(kRasterNames))
         ->capture_default_str();
-    cmd.add_flag("--depth-only", depthOnly,
-                 "z-buffer keeps only depth: no face ids or colour; depth is the stored value mapped back to eye depth");
+    CLI::Option* depthOnlyFlag = cmd.add_flag(
+        "--depth-only", depthOnly,
+        "z-buffer keeps only depth: no face ids or colour; depth is the stored value mapped back to eye depth");
+    cmd.add_option("--outputs", outputs,
+                   "Buffers the z-buffer resolves, comma-separated: depth (always), face, triangle, color (default: "
+                   "all; depth alone = --depth-only). Buffers not asked for are not written")
+        ->type_name("LIST")
+        ->excludes(depthOnlyFlag);
     cmd.add_option("--cull", cull, "Face culling (faces are two-sided by default)")
         ->check(oneOf(kCullNames))
         ->capture_default_str();
@@ -208,6 +215,12 @@ struct ViewFlags {
                     ->group(group);
   }
 
+  // What the z-buffer resolves (checked before the scene is loaded).
+  hsr::FrameOutputs frameOutputs() const {
+    if (depthOnly) return hsr::FrameOutputs::DepthOnly;
+    return outputs.empty() ? hsr::FrameOutputs::All : hsr::parseFrameOutputs(outputs, "--outputs");
+  }
+
   bool openGlFlagsGiven() const {
     return !eye.empty() || !target.empty() || !up.empty() || fovFlag->count() || orthoFlag->count();
   }
@@ -220,7 +233,7 @@ struct ViewFlags {
     ImageSize imageSize = parseSize(size);
     job.options = options;
     job.options.raster = valueOf(kRasterNames, raster);
-    if (depthOnly) job.options.outputs = hsr::FrameOutputs::DepthOnly;
+    job.options.outputs = frameOutputs();
     job.options.cull = valueOf(kCullNames, cull);
     job.options.shading = valueOf(kShadingNames, shading);
     if (!depthFormat.empty()) job.options.depthFormat = hsr::DepthFormat::parse(depthFormat);
@@ -316,6 +329,13 @@ int runRender(const RenderFlags& f) {
   if (f.view.depthOnly && (!f.out.empty() || !f.ids.empty()))
     throw InputError("--depth-only keeps no colour or face ids: drop --out/--ids or --depth-only");
   if (f.view.depthOnly && f.verify) throw InputError("--verify compares face ids, which --depth-only does not keep");
+  const hsr::FrameOutputs kept = f.view.frameOutputs();
+  if (!f.out.empty() && !has(kept, hsr::FrameOutputs::Color))
+    throw InputError("--out: --outputs " + f.view.outputs + " keeps no colour (add color)");
+  if (!f.ids.empty() && !has(kept, hsr::FrameOutputs::FaceIds))
+    throw InputError("--ids: --outputs " + f.view.outputs + " keeps no face ids (add face)");
+  if (f.verify && !has(kept, hsr::FrameOutputs::IdsAndDepth))
+    throw InputError("--verify compares face and triangle ids: --outputs " + f.view.outputs + " lacks face or triangle");
 
   Job job = f.view.prepare();
   job.options.verify = f.verify;
@@ -423,6 +443,7 @@ int runBench(const BenchFlags& f) {
   out["scene"] = job.sceneName;
   out["size"] = fmt::format("{}x{}", frame.width, frame.height);
   out["threads"] = threads;
+  out["outputs"] = hsr::frameOutputsName(job.options.outputs);
   out["kernel_isa"] = hsr::kernelInstructionSet();
   out["cpu"] = cpuModel();
   out["frames"] = n;
@@ -467,6 +488,7 @@ Runner setupBench(CLI::App& cmd) {
       "calls).\n\n"
       "Examples:\n"
       "  hsr bench builtin:cubes --frames 20\n"
+      "  hsr bench builtin:sphere --size 1920x1080 --outputs depth,face,color\n"
       "  hsr bench model.obj --camera cam.json --size 1920x1080 --algorithm zbuffer --threads 1 --json");
   return [f] { return runBench(*f); };
 }

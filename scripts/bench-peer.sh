@@ -4,13 +4,16 @@
 # Markdown table quoted in docs/benchmarks.md. Run as root (or with sudo) on Debian 12.
 # Usage: scripts/bench-peer.sh [SIZE, default 1920x1080] [FRAMES, default 15]
 #        environment: THREADS (default 2: hsr --threads and LP_NUM_THREADS), RASTER (hsr's z-buffer
-#        rasterizer: default, or halfspace = the scalar reference, or scanline), BUILD_DIR (default build)
+#        rasterizer: default, or halfspace = the scalar reference, or scanline), OUTPUTS (hsr's buffers,
+#        default depth,face,color = the GL framebuffer's attachments; every frame is also timed with all
+#        four of hsr's buffers), BUILD_DIR (default build)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 size="${1:-1920x1080}"
 frames="${2:-15}"
 threads="${THREADS:-2}"
 raster="${RASTER:-default}"
+outputs="${OUTPUTS:-depth,face,color}"
 build="${BUILD_DIR:-build}"
 
 # Set-up: hsr's own packages, then the GL side — headers and libOpenGL/libEGL (GLVND) to build,
@@ -29,13 +32,13 @@ cmake --build "$build" --target hsr_peer_llvmpipe
 echo
 echo "date: $(date -u '+%Y-%m-%d %H:%M UTC'); commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
 echo "cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), $(nproc) cores; load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
-echo "size $size, $frames frames interleaved after 2 warm-up frames, hsr --threads $threads --raster $raster, LP_NUM_THREADS=$threads"
+echo "size $size, $frames frames interleaved after 2 warm-up frames, hsr --threads $threads --raster $raster --outputs $outputs (each frame also with all four buffers), LP_NUM_THREADS=$threads"
 
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
 header_done=0
 for scene in builtin:sphere builtin:city "builtin:random?n=10000" "builtin:layers?n=64" builtin:cubes; do
-  if ! row="$("$peer" "$scene" --size "$size" --frames "$frames" --threads "$threads" --raster "$raster" --markdown-row 2>"$log")"; then
+  if ! row="$("$peer" "$scene" --size "$size" --frames "$frames" --threads "$threads" --raster "$raster" --outputs "$outputs" --markdown-row 2>"$log")"; then
     cat "$log" >&2
     echo "bench-peer: the peer failed on $scene (the line above says why). Without an llvmpipe context, check" \
       "that Mesa's libegl-mesa0 and libgl1-mesa-dri are installed: llvmpipe runs through their EGL surfaceless platform." >&2
@@ -44,8 +47,8 @@ for scene in builtin:sphere builtin:city "builtin:random?n=10000" "builtin:layer
   if [ "$header_done" -eq 0 ]; then
     grep '^GL_' "$log"  # GL_RENDERER and GL_VERSION: the proof that it is llvmpipe
     echo
-    echo "| scene | triangles | hsr ms median | hsr ms min | llvmpipe ms median | llvmpipe ms min | ratio llvmpipe/hsr (medians) | writing hsr's frame once, ms median | face ids equal (% of covered) | non-edge mismatches |"
-    echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    echo "| scene | triangles | hsr ms median | hsr ms min | llvmpipe ms median | llvmpipe ms min | ratio llvmpipe/hsr (medians) | writing hsr's frame once, ms median | hsr ms median, all four buffers | ratio, all four buffers | face ids equal (% of covered) | non-edge mismatches |"
+    echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     header_done=1
   fi
   echo "$row"

@@ -145,6 +145,29 @@ TEST_F(CommandLine, IdsAndDepthNpyAgree) {
   EXPECT_GT(empty, 0u);
 }
 
+// --outputs: only the buffers asked for are resolved; the files written from them are the same
+// bytes as a full render's.
+TEST_F(CommandLine, OutputsListKeepsOnlyWhatIsAsked) {
+  ASSERT_EQ(hsr("render builtin:cubes --size 64x48 --ids full.npy --depth full_d.npy -o full.png -q").status, 0);
+  Result r = hsr("render builtin:cubes --size 64x48 --outputs depth,face,color --ids part.npy --depth part_d.npy "
+                 "-o part.png --json");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_EQ(readText(file("part.npy")), readText(file("full.npy")));
+  EXPECT_EQ(readText(file("part_d.npy")), readText(file("full_d.npy")));
+  EXPECT_EQ(readText(file("part.png")), readText(file("full.png")));
+  Result full = hsr("bench builtin:cubes --size 64x48 --frames 1 --json");
+  Result part = hsr("bench builtin:cubes --size 64x48 --frames 1 --json --outputs face,depth");
+  ASSERT_EQ(full.status, 0) << full;
+  ASSERT_EQ(part.status, 0) << part;
+  const nlohmann::json f = nlohmann::json::parse(full.out), p = nlohmann::json::parse(part.out);
+  EXPECT_EQ(f["outputs"], "depth,face,triangle,color");
+  EXPECT_EQ(p["outputs"], "depth,face");
+  EXPECT_EQ(p["color_writes"], 0);
+  EXPECT_GT(f["color_writes"].get<int>(), 0);
+  EXPECT_EQ(p["covered_pixels"], f["covered_pixels"]);
+  EXPECT_EQ(f["memory_bytes"].get<uint64_t>() - p["memory_bytes"].get<uint64_t>(), 64u * 48 * 8);  // two buffers
+}
+
 TEST_F(CommandLine, StatsJsonHasConventionKeys) {
   Result r = hsr("render builtin:cubes --size 64x48 --threads 1 --stats s.json --verify");
   ASSERT_EQ(r.status, 0) << r;
@@ -217,6 +240,9 @@ TEST_F(CommandLine, BadUsageIsExitTwoWithOneLine) {
         "render builtin:cubes --eye 1,2", "render builtin:cubes --fov nan", "render builtin:cubes --background 1,2,300",
         "render builtin:cubes --depth d.tiff", "render builtin:cubes --depth-only -o c.png",
         "render builtin:cubes --depth-only --ids i.png", "render builtin:cubes --depth-only --verify", "render",
+        "render builtin:cubes --outputs depth,colour", "render builtin:cubes --outputs face --depth-only",
+        "render builtin:cubes --outputs depth,face -o c.png", "render builtin:cubes --outputs color --ids i.png",
+        "render builtin:cubes --outputs face,color --verify", "bench builtin:cubes --outputs face,", 
         "bench builtin:cubes --frames 0", "help nonsense", ""}) {
     Result r = hsr(args);
     EXPECT_EQ(r.status, 2) << args << "\n" << r;

@@ -364,18 +364,52 @@ TEST(Tiled, DepthOnlyKeepsOnlyDepth) {
   }
 }
 
-// Ids and depth without colour: no colour buffer, nothing else changes.
-TEST(Tiled, IdsAndDepthWithoutColour) {
+// Any set of outputs with ids: the buffers asked for equal the full frame's, bit for bit, for the
+// tiled rasterizer (1 and 2 threads) and the reference; the others are empty and cost nothing.
+TEST(Tiled, EverySetOfOutputsEqualsTheFullFrame) {
   const Scene scene = loadScene("builtin:city");
   const Camera cam = resolveCamera(*scene.camera, 240, 135, scene.bounds());
-  const Frame full = renderWith(scene, cam, DepthFormat{}, RasterKind::Tiled, 2);
-  const Frame ids = renderWith(scene, cam, DepthFormat{}, RasterKind::Tiled, 2, FrameOutputs::IdsAndDepth);
-  EXPECT_EQ(full.faceId, ids.faceId);
-  EXPECT_EQ(firstDifference(full.depth, ids.depth), -1);
-  EXPECT_EQ(ids.stats.color_writes, 0u);
-  EXPECT_TRUE(ids.color.empty());
-  EXPECT_EQ(full.triangleId, ids.triangleId);
-  EXPECT_EQ(full.color.size(), full.depth.size());
+  for (RasterKind raster : {RasterKind::Tiled, RasterKind::HalfSpace}) {
+    const Frame full = renderWith(scene, cam, DepthFormat{}, raster, 2);
+    ASSERT_EQ(full.color.size(), full.depth.size());
+    for (uint8_t bits = 1; bits <= uint8_t(FrameOutputs::All); ++bits)
+      for (int threads : {1, 2}) {
+        const FrameOutputs outputs = FrameOutputs(bits);
+        const std::string what = frameOutputsName(outputs) + " threads " + std::to_string(threads);
+        const Frame part = renderWith(scene, cam, DepthFormat{}, raster, threads, outputs);
+        EXPECT_EQ(firstDifference(full.depth, part.depth), -1) << what;
+        if (has(outputs, FrameOutputs::FaceIds)) EXPECT_EQ(full.faceId, part.faceId) << what;
+        else EXPECT_TRUE(part.faceId.empty()) << what;
+        if (has(outputs, FrameOutputs::TriangleIds)) EXPECT_EQ(full.triangleId, part.triangleId) << what;
+        else EXPECT_TRUE(part.triangleId.empty()) << what;
+        if (has(outputs, FrameOutputs::Color)) {
+          EXPECT_EQ(firstDifference(full.color, part.color), -1) << what;
+          EXPECT_EQ(part.stats.color_writes, full.stats.color_writes) << what;
+        } else {
+          EXPECT_TRUE(part.color.empty()) << what;
+          EXPECT_EQ(part.stats.color_writes, 0u) << what;
+        }
+        EXPECT_EQ(part.stats.covered_pixels, full.stats.covered_pixels) << what;
+        EXPECT_EQ(part.stats.depth_writes, full.stats.depth_writes) << what;
+        if (outputs != FrameOutputs::All) EXPECT_LT(part.stats.memory_bytes, full.stats.memory_bytes) << what;
+      }
+  }
+}
+
+TEST(Tiled, OutputListsParseAndName) {
+  EXPECT_EQ(parseFrameOutputs("depth"), FrameOutputs::DepthOnly);
+  EXPECT_EQ(parseFrameOutputs("depth,face,triangle,color"), FrameOutputs::All);
+  EXPECT_EQ(parseFrameOutputs("color,face"), FrameOutputs::FaceIds | FrameOutputs::Color);
+  EXPECT_EQ(parseFrameOutputs("triangle,face,depth"), FrameOutputs::IdsAndDepth);
+  EXPECT_EQ(frameOutputsName(FrameOutputs::All), "depth,face,triangle,color");
+  EXPECT_EQ(frameOutputsName(FrameOutputs::DepthOnly), "depth");
+  for (uint8_t bits = 0; bits <= uint8_t(FrameOutputs::All); ++bits)
+    EXPECT_EQ(parseFrameOutputs(frameOutputsName(FrameOutputs(bits))), FrameOutputs(bits));
+  for (const char* bad : {"", "colour", "depth,", "face,,color", "Face", "depth color"})
+    EXPECT_THROW(parseFrameOutputs(bad), InputError) << bad;
+  EXPECT_TRUE(has(FrameOutputs::All, FrameOutputs::IdsAndDepth));
+  EXPECT_FALSE(has(FrameOutputs::FaceIds | FrameOutputs::Color, FrameOutputs::IdsAndDepth));
+  EXPECT_FALSE(has(FrameOutputs::All, FrameOutputs::DepthOnly));
 }
 
 // Every path of the kernel in one frame: screen-parallel layers (whole tiles and whole blocks
@@ -780,7 +814,8 @@ TEST(Tiled, ReusedFrameIsFullyOverwritten) {
   const Scene full = loadScene("builtin:layers?n=3"), sparse = loadScene("builtin:cubes");
   const Camera fullCam = resolveCamera(*full.camera, 150, 100, full.bounds());
   const Camera sparseCam = resolveCamera(frameBounds(sparse.bounds()), 150, 100, sparse.bounds());
-  for (FrameOutputs outputs : {FrameOutputs::All, FrameOutputs::IdsAndDepth, FrameOutputs::DepthOnly}) {
+  for (FrameOutputs outputs : {FrameOutputs::All, FrameOutputs::IdsAndDepth, FrameOutputs::FaceIds | FrameOutputs::Color,
+                               FrameOutputs::DepthOnly}) {
     RenderOptions o;
     o.outputs = outputs;
     o.background = Rgba8{10, 20, 30, 255};

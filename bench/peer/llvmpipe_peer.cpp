@@ -39,6 +39,9 @@ struct Options {
   int warmup = 2;
   int threads = 0;                 // 0: all cores, for hsr and llvmpipe alike
   std::string raster = "default";  // hsr's z-buffer rasterizer: its default or a named one
+  // hsr's buffers: by default those of the GL framebuffer (colour, face id, depth); every frame
+  // is also timed with all four of hsr's buffers (triangle ids too).
+  std::string outputs = "depth,face,color";
   bool json = false;
   bool markdownRow = false;
 };
@@ -329,6 +332,11 @@ int run(Options& o) {
   hsr::RenderOptions hsrOptions;
   hsrOptions.shading = hsr::Shading::Flat;  // flat face colours, as the GL side draws
   hsrOptions.threads = threads;
+  hsrOptions.outputs = hsr::parseFrameOutputs(o.outputs, "--outputs");
+  if (!has(hsrOptions.outputs, hsr::FrameOutputs::FaceIds))
+    throw InputError("--outputs '" + o.outputs + "': the comparison needs face ids (add face)");
+  hsr::RenderOptions allOptions = hsrOptions;
+  allOptions.outputs = hsr::FrameOutputs::All;
   // Named rasterizers pin what is measured (halfspace: the scalar reference); "default" follows
   // hsr's own default, as `hsr render` and `hsr bench` do.
   if (o.raster == "halfspace") hsrOptions.raster = hsr::RasterKind::HalfSpace;
@@ -343,11 +351,13 @@ int run(Options& o) {
 
   // Interleaved: each iteration times one hsr frame, then one GL frame, so both see the same
   // machine load. The first `warmup` iterations (llvmpipe compiles its shaders) are not timed.
-  // A third timing is a floor for hsr: writing every buffer of a frame of this size once (the
-  // frame's clear, on the same threads, into a frame of its own), no rendering at all.
-  std::vector<double> hsrMs, glMs, writeMs;
-  hsr::Frame frame, written;
-  written.allocate(o.width, o.height);
+  // A third timing is hsr with all four of its buffers (triangle ids too, when --outputs leaves
+  // some out), into a frame of its own; a fourth a floor for hsr: writing every buffer of
+  // --outputs once (the frame's clear, on the same threads, into a frame of its own), no
+  // rendering at all.
+  std::vector<double> hsrMs, glMs, allMs, writeMs;
+  hsr::Frame frame, allFrame, written;
+  written.allocate(o.width, o.height, hsrOptions.outputs);
   for (int i = 0; i < o.warmup + o.frames; ++i) {
     auto start = std::chrono::steady_clock::now();
     hsr::render(scene, camera, hsrOptions, frame);  // reuses the frame's buffers, as GL reuses its FBO
@@ -356,16 +366,23 @@ int run(Options& o) {
     gl.drawFrame(hsrOptions.background);
     const double glFrameMs = msSince(start);
     start = std::chrono::steady_clock::now();
+    hsr::render(scene, camera, allOptions, allFrame);
+    const double allFrameMs = msSince(start);
+    start = std::chrono::steady_clock::now();
     written.clear(hsrOptions.background, threads);
     const double writeFrameMs = msSince(start);
     if (i >= o.warmup) {
       hsrMs.push_back(hsrFrameMs);
       glMs.push_back(glFrameMs);
+      allMs.push_back(allFrameMs);
       writeMs.push_back(writeFrameMs);
     }
   }
-  const Timing hsrTime = summarize(hsrMs), glTime = summarize(glMs), writeTime = summarize(writeMs);
-  const double ratio = glTime.median / hsrTime.median;
+  if (allFrame.faceId != frame.faceId)
+    throw std::runtime_error("hsr's face ids differ between --outputs " + o.outputs + " and all four buffers");
+  const Timing hsrTime = summarize(hsrMs), glTime = summarize(glMs), allTime = summarize(allMs),
+               writeTime = summarize(writeMs);
+  const double ratio = glTime.median / hsrTime.median, ratioAll = glTime.median / allTime.median;
 
   // Agreement of the last frames: face ids, then eye depth where the ids agree.
   const std::vector<int32_t> glIds = gl.readFaceIds();
@@ -393,6 +410,7 @@ int run(Options& o) {
     out["height"] = o.height;
     out["threads"] = threads;
     out["hsr_raster"] = o.raster;
+    out["hsr_outputs"] = hsr::frameOutputsName(hsrOptions.outputs);
     out["frames"] = o.frames;
     out["warmup"] = o.warmup;
     out["gl_renderer"] = renderer;
@@ -402,6 +420,9 @@ int run(Options& o) {
     out["gl_median_ms"] = glTime.median;
     out["gl_min_ms"] = glTime.min;
     out["ratio"] = ratio;
+    out["hsr_all_outputs_median_ms"] = allTime.median;
+    out["hsr_all_outputs_min_ms"] = allTime.min;
+    out["ratio_all_outputs"] = ratioAll;
     out["frame_write_median_ms"] = writeTime.median;
     out["covered_pixels"] = ids.covered;
     out["equal_pixels"] = ids.equal;
@@ -414,16 +435,19 @@ int run(Options& o) {
     out["depth_max_diff"] = depthMaxDiff;
     fmt::print("{}\n", out.dump(2));
   } else if (o.markdownRow) {
-    fmt::print("| `{}` | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.2f} | {:.1f} | {:.3f}% | {} |\n", o.scene,
-               scene.triangles.size(), hsrTime.median, hsrTime.min, glTime.median, glTime.min, ratio,
-               writeTime.median, 100.0 * ids.equalFraction(), ids.nonEdgeMismatches);
+    fmt::print("| `{}` | {} | {:.1f} | {:.1f} | {:.1f} | {:.1f} | {:.2f} | {:.1f} | {:.1f} | {:.2f} | {:.3f}% | {} |\n",
+               o.scene, scene.triangles.size(), hsrTime.median, hsrTime.min, glTime.median, glTime.min, ratio,
+               writeTime.median, allTime.median, ratioAll, 100.0 * ids.equalFraction(), ids.nonEdgeMismatches);
   } else {
     fmt::print("{}: {} triangles, {}x{}, {} threads, {} frames interleaved ({} warm-up)\n", o.scene,
                scene.triangles.size(), o.width, o.height, threads, o.frames, o.warmup);
-    fmt::print("  hsr zbuffer ({} raster): median {:.2f} ms, min {:.2f} ms\n", o.raster, hsrTime.median, hsrTime.min);
+    fmt::print("  hsr zbuffer ({} raster, outputs {}): median {:.2f} ms, min {:.2f} ms\n", o.raster,
+               hsr::frameOutputsName(hsrOptions.outputs), hsrTime.median, hsrTime.min);
     fmt::print("  llvmpipe:    median {:.2f} ms, min {:.2f} ms\n", glTime.median, glTime.min);
     fmt::print("  ratio llvmpipe / hsr (medians): {:.3f}\n", ratio);
     fmt::print("  writing hsr's frame once (clear, no rendering): median {:.2f} ms\n", writeTime.median);
+    fmt::print("  hsr with all four buffers (triangle ids too): median {:.2f} ms, ratio llvmpipe / hsr {:.3f}\n",
+               allTime.median, ratioAll);
     fmt::print("  face ids: {} of {} covered pixels equal ({:.4f}%), {} mismatches on edges, {} elsewhere\n", ids.equal,
                ids.covered, 100.0 * ids.equalFraction(), ids.edgeMismatches, ids.nonEdgeMismatches);
     for (auto [x, y] : ids.firstNonEdge) {
@@ -456,10 +480,16 @@ int main(int argc, char** argv) {
                  "hsr's z-buffer rasterizer: hsr's default, or halfspace (the scalar reference) or scanline")
       ->check(CLI::IsMember({"default", "halfspace", "scanline"}))
       ->capture_default_str();
+  app.add_option("--outputs", o.outputs,
+                 "hsr's buffers (hsr bench --outputs): by default the GL framebuffer's attachments; each frame is "
+                 "also timed with all four of hsr's buffers")
+      ->type_name("LIST")
+      ->capture_default_str();
   auto* json = app.add_flag("--json", o.json, "Print one JSON object");
   app.add_flag("--markdown-row", o.markdownRow,
                "Print one Markdown table row: scene, triangles, hsr ms median and min, llvmpipe ms median and min, "
-               "ratio of medians, ms to write hsr's frame once (median), equal ids %, non-edge mismatches")
+               "ratio of medians, ms to write hsr's frame once (median), hsr ms median with all four buffers, its ratio, "
+               "equal ids %, non-edge mismatches")
       ->excludes(json);
   try {
     app.parse(argc, argv);

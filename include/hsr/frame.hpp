@@ -14,6 +14,32 @@
 
 namespace hsr {
 
+/// What the z-buffer resolves into the Frame: depth always, and any of face ids, triangle ids
+/// and colour (flags, combined with |). Buffers not asked for cost nothing: they are neither
+/// cleared nor written, and stay empty.
+/// - DepthOnly (no flag): depth is the eye depth recovered from the stored value by inverting
+///   the depth mapping (so it carries the format's rounding), and the z-buffer keeps no ids.
+/// - With any flag, depth is the exact eye depth of the winning triangle's planes.
+/// All = FaceIds | TriangleIds | Color (the default); IdsAndDepth = FaceIds | TriangleIds.
+/// FaceIds | Color is what OpenGL renders into colour + id + depth attachments (bench/peer).
+enum class FrameOutputs : uint8_t {
+  DepthOnly = 0,
+  FaceIds = 1,
+  TriangleIds = 2,
+  Color = 4,
+  IdsAndDepth = FaceIds | TriangleIds,
+  All = FaceIds | TriangleIds | Color,
+};
+constexpr FrameOutputs operator|(FrameOutputs a, FrameOutputs b) { return FrameOutputs(uint8_t(a) | uint8_t(b)); }
+/// Whether `outputs` holds every flag of `part` (a non-empty set).
+constexpr bool has(FrameOutputs outputs, FrameOutputs part) {
+  return part != FrameOutputs::DepthOnly && (uint8_t(outputs) & uint8_t(part)) == uint8_t(part);
+}
+/// "depth,face,triangle,color" (any order; depth alone = DepthOnly) <-> FrameOutputs; parse
+/// throws InputError naming `what` on an unknown word.
+FrameOutputs parseFrameOutputs(const std::string& list, const std::string& what = "--outputs");
+std::string frameOutputsName(FrameOutputs outputs);
+
 /// The allocator of Frame's buffers: memory aligned to a 64-byte cache line, so that the rows of
 /// an image whose width is a multiple of 16 pixels start on a cache line and the tiled rasterizer
 /// can write whole lines with streaming (non-temporal) stores. Otherwise as std::allocator.
@@ -71,11 +97,10 @@ struct Frame {
   FrameBuffer<Rgba8> color;         // shaded colour, background colour where empty
   Stats stats;
 
-  /// Sizes the buffers for w x h, reusing their memory: depth always, faceId and triangleId when
-  /// `ids`, color when `color`; the others are emptied (a frame rendered with FrameOutputs
-  /// IdsAndDepth has no colour buffer, DepthOnly only depth). Contents are left as they are:
+  /// Sizes the buffers for w x h, reusing their memory: depth always, faceId, triangleId and
+  /// color when `outputs` has them; the others are emptied. Contents are left as they are:
   /// render() allocates, and every algorithm then writes every pixel (or calls clear()).
-  void allocate(int w, int h, bool ids = true, bool color = true);
+  void allocate(int w, int h, FrameOutputs outputs = FrameOutputs::All);
   /// Clears the sized buffers to background / -1 / +inf, split over up to `threads` threads.
   void clear(Rgba8 background, int threads = 1);
   /// allocate(w, h) with every buffer, then clear().

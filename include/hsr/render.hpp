@@ -25,12 +25,7 @@ enum class Shading : uint8_t { Flat, Lambert, FaceId };
 /// The z-buffer's rasterizer. Tiled (default): binned, tiled, SIMD, multithreaded, bit-identical
 /// to HalfSpace (the scalar reference and its test oracle). Scanline: document 003's.
 enum class RasterKind : uint8_t { Tiled, HalfSpace, Scanline };
-/// What the z-buffer resolves into the Frame. All: face and triangle ids, eye depth, colour.
-/// IdsAndDepth: no colour (Frame::color is empty; color_writes 0). DepthOnly: only the depth
-/// buffer (faceId, triangleId and color are empty), and depth is the eye depth recovered from
-/// the stored value by inverting the depth mapping (so it carries the format's rounding).
-/// Buffers not asked for cost nothing: they are neither cleared nor written.
-enum class FrameOutputs : uint8_t { All, IdsAndDepth, DepthOnly };
+// What the z-buffer resolves into the Frame: FrameOutputs (frame.hpp).
 
 struct RenderOptions {
   std::string algorithm = "zbuffer";

@@ -175,7 +175,7 @@ void OcclusionBuffer::depthImage(Frame& frame) const {
   const Impl& im = *impl_;
   requireRendered(width(), "depthImage");
   const tiled::Bins& bins = im.state.bins;
-  frame.allocate(bins.width, bins.height, false, false);
+  frame.allocate(bins.width, bins.height, FrameOutputs::DepthOnly);
   frame.stats = im.stats;
   // One tile row per task, written band by band across it (long row pieces: tiled::resolveTile).
   std::vector<uint64_t> covered(size_t(bins.tilesY), 0);

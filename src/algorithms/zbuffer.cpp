@@ -44,7 +44,8 @@ void drawReference(const std::vector<SetupTriangle>& tris, const Camera& cam, co
   constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
   const double n0 = cam.near, f0 = cam.far;
   const bool ortho = cam.orthographic;
-  const bool color = opt.outputs == FrameOutputs::All, ids = opt.outputs != FrameOutputs::DepthOnly;
+  const bool color = has(opt.outputs, FrameOutputs::Color), ids = opt.outputs != FrameOutputs::DepthOnly;
+  const bool faceIds = has(opt.outputs, FrameOutputs::FaceIds), triangleIds = has(opt.outputs, FrameOutputs::TriangleIds);
   const T clear = quantizeDepth<S>(opt.depthFormat.clearValue());
   frame.clear(opt.background, resolveThreads(opt.threads));
   std::vector<T> zbuf(size_t(cam.width) * cam.height, clear);
@@ -84,8 +85,8 @@ void drawReference(const std::vector<SetupTriangle>& tris, const Camera& cam, co
       } else {
         if (!triOf[idx]) continue;
         const SetupTriangle& t = tris[triOf[idx] - 1];
-        frame.faceId[idx] = int32_t(t.face);
-        frame.triangleId[idx] = int32_t(t.triangle);
+        if (faceIds) frame.faceId[idx] = int32_t(t.face);
+        if (triangleIds) frame.triangleId[idx] = int32_t(t.triangle);
         frame.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
         if (color) frame.color[idx] = triangleColor(t, shade);
       }
@@ -188,11 +189,11 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
   // Fragments that won the depth test: each writes the colour in the reference; the tiled path
   // writes the winner's id instead and its colour once per pixel at resolve (deferred), counted
   // like the reference, one per winning fragment.
-  st.color_writes = opt.outputs == FrameOutputs::All ? st.depth_writes : 0;
+  st.color_writes = has(opt.outputs, FrameOutputs::Color) ? st.depth_writes : 0;
   st.covered_pixels = n.covered;
-  const uint64_t pixels = uint64_t(cam.width) * cam.height;
-  st.memory_bytes = bufferBytes + pixels * (sizeof(Rgba8) + 2 * sizeof(int32_t) + sizeof(float)) /* frame */ +
-                    fe.memoryBytes();
+  const uint64_t frameBytes = frame.depth.size() * sizeof(float) + frame.faceId.size() * sizeof(int32_t) +
+                              frame.triangleId.size() * sizeof(int32_t) + frame.color.size() * sizeof(Rgba8);
+  st.memory_bytes = bufferBytes + frameBytes + fe.memoryBytes();
 }
 
 }  // namespace hsr::algo

@@ -51,14 +51,46 @@ std::string Stats::toJson(int indent) const {
   return j.dump(indent);
 }
 
-void Frame::allocate(int w, int h, bool ids, bool withColor) {
+void Frame::allocate(int w, int h, FrameOutputs outputs) {
   width = w;
   height = h;
   const size_t n = size_t(w) * size_t(h);
   depth.resize(n);
-  faceId.resize(ids ? n : 0);
-  triangleId.resize(ids ? n : 0);
-  color.resize(withColor ? n : 0);
+  faceId.resize(has(outputs, FrameOutputs::FaceIds) ? n : 0);
+  triangleId.resize(has(outputs, FrameOutputs::TriangleIds) ? n : 0);
+  color.resize(has(outputs, FrameOutputs::Color) ? n : 0);
+}
+
+namespace {
+constexpr std::pair<const char*, FrameOutputs> kOutputWords[] = {
+    {"face", FrameOutputs::FaceIds}, {"triangle", FrameOutputs::TriangleIds}, {"color", FrameOutputs::Color}};
+}
+
+FrameOutputs parseFrameOutputs(const std::string& list, const std::string& what) {
+  FrameOutputs outputs = FrameOutputs::DepthOnly;
+  size_t begin = 0;
+  while (begin <= list.size()) {
+    const size_t end = std::min(list.find(',', begin), list.size());
+    const std::string word = list.substr(begin, end - begin);
+    bool known = word == "depth";
+    for (auto [name, flag] : kOutputWords)
+      if (word == name) {
+        outputs = outputs | flag;
+        known = true;
+      }
+    if (!known)
+      throw InputError(what + ": unknown output '" + word + "' in '" + list +
+                       "' (a comma-separated list of depth, face, triangle, color)");
+    begin = end + 1;
+  }
+  return outputs;
+}
+
+std::string frameOutputsName(FrameOutputs outputs) {
+  std::string name = "depth";
+  for (auto [word, flag] : kOutputWords)
+    if (has(outputs, flag)) name += std::string(",") + word;
+  return name;
 }
 
 void Frame::clear(Rgba8 background, int threads) {

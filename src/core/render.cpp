@@ -58,14 +58,14 @@ void render(const Scene& scene, const Camera& camera, const RenderOptions& optio
   }
   algo::checkImage(camera, options.depthFormat);
 
-  if (options.verify && options.outputs == FrameOutputs::DepthOnly)
-    throw InputError("--verify: compares face ids, which --depth-only does not keep");
+  if (options.verify && !has(options.outputs, FrameOutputs::IdsAndDepth))
+    throw InputError("--verify: compares face and triangle ids, which the outputs asked for (" +
+                     frameOutputsName(options.outputs) + ") do not keep");
 
   Timer total;
   frame.stats = algo::frameStats(scene, camera);
   // Sized, not cleared: every algorithm writes every pixel (a pass over 33 MB less at 1080p).
-  frame.allocate(camera.width, camera.height, options.outputs != FrameOutputs::DepthOnly,
-                 options.outputs == FrameOutputs::All);
+  frame.allocate(camera.width, camera.height, options.outputs);
   algorithm->run(scene, camera, options, frame);
   frame.stats.addTime("total", total.ms());
 

@@ -359,7 +359,7 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
   out.deferred.clear();
   out.clusters.clear();
   FrontEndCounters& counters = out.counters;
-  const bool color = options.outputs == FrameOutputs::All;
+  const bool color = has(options.outputs, FrameOutputs::Color);
   constexpr size_t kBatch = 64;
   uint32_t batchVertex[3][kBatch], batchTriangle[kBatch], batchFace[kBatch];
   SetupTriangle batchOut[kBatch];

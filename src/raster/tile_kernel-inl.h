@@ -717,7 +717,7 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
 // id), triangle = (int32 triangle id, Rgba8 colour), the first of each pair in the low half.
 HWY_INLINE uint64_t PackCell(uint32_t low, uint32_t high) { return uint64_t(high) << 32 | low; }
 
-// The colour of a set-up triangle for the frame (FrameOutputs::All), remembering the last one:
+// The colour of a set-up triangle for the frame (FrameOutputs::Color), remembering the last one:
 // neighbouring pixels mostly share their triangle, and back faces are shaded here.
 struct ColorCache {
   const TriangleShader* shader;
@@ -803,16 +803,20 @@ void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
   s.resolved = true;
 }
 
-// Ids (and colour): writes the tile's rows [rowBegin, rowEnd) into the frame. Blocks held pixel
-// by pixel are copied from the cells prepareResolve filled; uniform ones (a cleared tile, a
-// plane tile or block) are computed from their triangle, a row of lanes at a time.
-template <bool kColor>
+// With ids: writes the tile's rows [rowBegin, rowEnd) into the frame's depth and the buffers
+// kOutputs asks for (FrameOutputs flags). Blocks held pixel by pixel are copied from the cells
+// prepareResolve filled; uniform ones (a cleared tile, a plane tile or block) are computed from
+// their triangle, a row of lanes at a time.
+template <uint8_t kOutputs>
 uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background, int rowBegin, int rowEnd,
                      Frame& frame) {
   const D d;
   const hn::Rebind<float, D> df;
   const hn::Rebind<uint32_t, D> du32;
   const size_t N = hn::Lanes(d);
+  constexpr bool kFace = kOutputs & uint8_t(FrameOutputs::FaceIds);
+  constexpr bool kTriangle = kOutputs & uint8_t(FrameOutputs::TriangleIds);
+  constexpr bool kColor = kOutputs & uint8_t(FrameOutputs::Color);
   const Bins& bins = *job.bins;
   const auto [x0, y0, w, h] = RectOf(job);
   if (s.state == TileState::Pixels && !s.resolved)
@@ -827,8 +831,9 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
     for (int y = rowBegin; y < std::min(rowEnd, h); ++y) {
       const size_t at = frame.index(x0, y0 + y);
       StreamFill(reinterpret_cast<uint32_t*>(frame.depth.data() + at), infinityBits, size_t(w));
-      StreamFill(reinterpret_cast<uint32_t*>(frame.faceId.data() + at), noIdBits, size_t(w));
-      StreamFill(reinterpret_cast<uint32_t*>(frame.triangleId.data() + at), noIdBits, size_t(w));
+      if constexpr (kFace) StreamFill(reinterpret_cast<uint32_t*>(frame.faceId.data() + at), noIdBits, size_t(w));
+      if constexpr (kTriangle)
+        StreamFill(reinterpret_cast<uint32_t*>(frame.triangleId.data() + at), noIdBits, size_t(w));
       if constexpr (kColor) StreamFill(reinterpret_cast<uint32_t*>(frame.color.data() + at), backgroundBits, size_t(w));
     }
     return 0;
@@ -875,8 +880,8 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
     }
     const size_t at = frame.index(x0, y0 + y);
     StreamCopy(reinterpret_cast<uint32_t*>(frame.depth.data() + at), rows[0], size_t(w));
-    StreamCopy(reinterpret_cast<uint32_t*>(frame.faceId.data() + at), rows[1], size_t(w));
-    StreamCopy(reinterpret_cast<uint32_t*>(frame.triangleId.data() + at), rows[2], size_t(w));
+    if constexpr (kFace) StreamCopy(reinterpret_cast<uint32_t*>(frame.faceId.data() + at), rows[1], size_t(w));
+    if constexpr (kTriangle) StreamCopy(reinterpret_cast<uint32_t*>(frame.triangleId.data() + at), rows[2], size_t(w));
     if constexpr (kColor)
       StreamCopy(reinterpret_cast<uint32_t*>(frame.color.data() + at), rows[3], size_t(w));
   }
@@ -885,8 +890,17 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
 
 uint64_t ResolveTile(const TileJob& job, const TileScratch& s, FrameOutputs outputs, Rgba8 background, int rowBegin,
                      int rowEnd, Frame& frame) {
-  if (outputs == FrameOutputs::All) return ResolveIdsT<true>(job, s, background, rowBegin, rowEnd, frame);
-  if (outputs == FrameOutputs::IdsAndDepth) return ResolveIdsT<false>(job, s, background, rowBegin, rowEnd, frame);
+  switch (uint8_t(outputs)) {  // every set of flags a resolve with ids can be asked for
+    case 1: return ResolveIdsT<1>(job, s, background, rowBegin, rowEnd, frame);
+    case 2: return ResolveIdsT<2>(job, s, background, rowBegin, rowEnd, frame);
+    case 3: return ResolveIdsT<3>(job, s, background, rowBegin, rowEnd, frame);
+    case 4: return ResolveIdsT<4>(job, s, background, rowBegin, rowEnd, frame);
+    case 5: return ResolveIdsT<5>(job, s, background, rowBegin, rowEnd, frame);
+    case 6: return ResolveIdsT<6>(job, s, background, rowBegin, rowEnd, frame);
+    case 7: return ResolveIdsT<7>(job, s, background, rowBegin, rowEnd, frame);
+    default: break;
+  }
+  static_assert(uint8_t(FrameOutputs::All) == 7);
   uint64_t covered = 0;
   visitDepthFormat(job.depth.format, [&]<DepthStorage S, DepthMapping M>() {
     covered = ResolveDepthT<S, M>(job, s, rowBegin, rowEnd, frame);
@@ -896,8 +910,8 @@ uint64_t ResolveTile(const TileJob& job, const TileScratch& s, FrameOutputs outp
 
 void PrepareResolve(const TileJob& job, FrameOutputs outputs, Rgba8 background) {
   if (job.scratch->state != TileState::Pixels) return;  // uniform: resolved from its triangle
-  if (outputs == FrameOutputs::All) PrepareResolveT<true>(job, *job.scratch, background);
-  else if (outputs == FrameOutputs::IdsAndDepth) PrepareResolveT<false>(job, *job.scratch, background);
+  if (has(outputs, FrameOutputs::Color)) PrepareResolveT<true>(job, *job.scratch, background);
+  else if (outputs != FrameOutputs::DepthOnly) PrepareResolveT<false>(job, *job.scratch, background);
 }
 
 // The exported entry: picks the compiled loop of the job's format and output.

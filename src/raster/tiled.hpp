@@ -295,7 +295,7 @@ void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids
                    TileOrder& order, RasterCounters& counters);
 
 /// Readies a tile that rasterizeTile(ids = true) left in `scratch` for resolveTile() with ids
-/// (FrameOutputs::All or IdsAndDepth), right after rasterizing, while the tile's set-up
+/// (any FrameOutputs but DepthOnly), right after rasterizing, while the tile's set-up
 /// triangles are still in this core's cache. A block won wholly by one triangle gets it as its
 /// blockKey, one where nothing was drawn blockClear (both resolved a row of lanes at a time);
 /// in the other blocks held pixel by pixel, each pixel is turned, in place, into what the frame
@@ -304,14 +304,14 @@ void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids
 /// frame band by band across several tiles, copies instead of looking triangles up. (Looked up
 /// at resolve, the records had left the cache: 40% of the resolve's samples were that load on
 /// the million-triangle sphere.) Depth and keys are gone afterwards (TileScratch::resolved).
-/// `shader` and `background`: colour, for FrameOutputs::All only.
+/// `shader` and `background`: colour, for outputs with FrameOutputs::Color only.
 void prepareResolve(const Bins& bins, int tile, FrameOutputs outputs, const TriangleShader* shader, Rgba8 background,
                     TileScratch& scratch);
 
 /// Writes every pixel of the tile of `scratch` into `frame` as `outputs` asks: ids, eye depth
 /// of the winning triangle's plane at the pixel centre (exactly as the reference resolves it),
-/// its colour (SetupTriangle::color, or from `shader` for back faces; needed for
-/// FrameOutputs::All only); or, for DepthOnly, the eye depth of
+/// its colour (SetupTriangle::color, or from `shader` for back faces; needed with
+/// FrameOutputs::Color only); or, for DepthOnly, the eye depth of
 /// the stored value; the background (-1, +inf, `background`) where nothing was drawn. The frame's
 /// buffers that `outputs` does not ask for are not touched. Only the tile's rows [rowBegin,
 /// rowEnd) (tile-local): a caller resolving several tiles writes the frame band by band across
