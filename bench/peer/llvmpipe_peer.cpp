@@ -352,29 +352,31 @@ int run(Options& o) {
   // Interleaved: each iteration times one hsr frame, then one GL frame, so both see the same
   // machine load. The first `warmup` iterations (llvmpipe compiles its shaders) are not timed.
   // A third timing is hsr with all four of its buffers (triangle ids too, when --outputs leaves
-  // some out), into a frame of its own; a fourth a floor for hsr: writing every buffer of
-  // --outputs once (the frame's clear, on the same threads, into a frame of its own), no
-  // rendering at all.
+  // some out), into a frame of its own, and the two hsr frames swap places every iteration (the
+  // one right after the GL frame finds caches and idle threads as llvmpipe left them); a fourth
+  // a floor for hsr: writing every buffer of --outputs once (the frame's clear, on the same
+  // threads, into a frame of its own), no rendering at all.
   std::vector<double> hsrMs, glMs, allMs, writeMs;
   hsr::Frame frame, allFrame, written;
   written.allocate(o.width, o.height, hsrOptions.outputs);
+  auto timed = [](auto&& work) {
+    const auto start = std::chrono::steady_clock::now();
+    work();
+    return msSince(start);
+  };
   for (int i = 0; i < o.warmup + o.frames; ++i) {
-    auto start = std::chrono::steady_clock::now();
-    hsr::render(scene, camera, hsrOptions, frame);  // reuses the frame's buffers, as GL reuses its FBO
-    const double hsrFrameMs = msSince(start);
-    start = std::chrono::steady_clock::now();
-    gl.drawFrame(hsrOptions.background);
-    const double glFrameMs = msSince(start);
-    start = std::chrono::steady_clock::now();
-    hsr::render(scene, camera, allOptions, allFrame);
-    const double allFrameMs = msSince(start);
-    start = std::chrono::steady_clock::now();
-    written.clear(hsrOptions.background, threads);
-    const double writeFrameMs = msSince(start);
+    // (each reuses its frame's buffers, as GL reuses its FBO)
+    auto renderHsr = [&] { return timed([&] { hsr::render(scene, camera, hsrOptions, frame); }); };
+    auto renderAll = [&] { return timed([&] { hsr::render(scene, camera, allOptions, allFrame); }); };
+    const bool hsrFirst = i % 2 == 0;
+    const double firstMs = hsrFirst ? renderHsr() : renderAll();
+    const double glFrameMs = timed([&] { gl.drawFrame(hsrOptions.background); });
+    const double secondMs = hsrFirst ? renderAll() : renderHsr();
+    const double writeFrameMs = timed([&] { written.clear(hsrOptions.background, threads); });
     if (i >= o.warmup) {
-      hsrMs.push_back(hsrFrameMs);
+      hsrMs.push_back(hsrFirst ? firstMs : secondMs);
       glMs.push_back(glFrameMs);
-      allMs.push_back(allFrameMs);
+      allMs.push_back(hsrFirst ? secondMs : firstMs);
       writeMs.push_back(writeFrameMs);
     }
   }
