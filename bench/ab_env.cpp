@@ -25,7 +25,9 @@ int main(int argc, char** argv) {
   app.add_option("--size", size, "Image size WxH");
   app.add_option("--threads", threads, "Worker threads");
   app.add_option("--frames", frames, "Timed pairs of frames (after 2 warm-up pairs)")->check(CLI::Range(1, 100000));
+  std::string outputs;
   app.add_flag("--depth-only", depthOnly, "Depth only (FrameOutputs::DepthOnly)");
+  app.add_option("--outputs", outputs, "Buffers resolved, as hsr bench --outputs (default all)");
   app.add_flag("--cull-back", cullBack, "Cull back faces (Cull::Back)");
   app.add_option("--var", var, "Environment variable");
   app.add_option("--values", values, "Its two values, A,B");
@@ -44,6 +46,7 @@ int main(int argc, char** argv) {
     hsr::RenderOptions o;
     o.threads = threads;
     o.shading = hsr::Shading::Flat;
+    if (!outputs.empty()) o.outputs = hsr::parseFrameOutputs(outputs);
     if (depthOnly) o.outputs = hsr::FrameOutputs::DepthOnly;
     if (cullBack) o.cull = hsr::Cull::Back;
     hsr::Frame frame[2];

@@ -459,6 +459,50 @@ TEST(Raster, BatchedNearestBoundsEqualScalarOnEveryInstructionSet) {
   EXPECT_GT(checkedFragments, 1000u);
 }
 
+// storedRangeOverRect (the kernel's block bounds) bounds every pixel centre of its rectangle, on
+// each triangle's plane extended past its edges: random rectangles of a 160 x 120 image, the
+// planes' errors taken over the whole image, every format, perspective and orthographic.
+TEST(Raster, RectangleBoundsHoldEveryPixelCentre) {
+  const ProjectedSoup soup = projectedSoup(91, 300, [](int, dvec2*) {});
+  const auto& [vertices, index, tri, face] = soup;
+  const Camera cam = pixelCamera();
+  const uint32_t* vertex[3] = {index[0].data(), index[1].data(), index[2].data()};
+  FrontEndCounters counts;
+  std::vector<SetupTriangle> batch(tri.size());
+  batch.resize(setupBatch(vertices.data(), vertex, tri.data(), face.data(), tri.size(), cam, Cull::None, counts,
+                          batch.data()));
+  ASSERT_GT(batch.size(), 100u);
+  std::mt19937 rng(7);
+  size_t bounded = 0, checked = 0;
+  for (const char* name : {"u16:z", "u24:reversed", "u32:inv", "u32:linear", "f32:z", "f32:reversed", "f32:inv"})
+    for (bool ortho : {false, true}) {
+      const DepthSetup depth{DepthFormat::parse(name), 0.5, 100.0, ortho};
+      visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() {
+        for (const SetupTriangle& t : batch) {
+          const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, depth.near, depth.far, ortho);
+          const double pErr = planeError(m.p, cam.width, cam.height), qErr = planeError(m.q, cam.width, cam.height);
+          for (int k = 0; k < 4; ++k) {
+            const int x0 = int(rng() % uint32_t(cam.width)), y0 = int(rng() % uint32_t(cam.height));
+            const int x1 = std::min(cam.width - 1, x0 + int(rng() % 12)), y1 = std::min(cam.height - 1, y0 + int(rng() % 12));
+            const StoredRange r = storedRangeOverRect<S, M>(m, pErr, qErr, x0 + 0.5, x1 + 0.5, y0 + 0.5, y1 + 0.5);
+            if (!std::isfinite(r.nearest) || !std::isfinite(r.farthest)) continue;  // "none": q not > 0 there
+            ++bounded;
+            for (int y = y0; y <= y1; ++y)
+              for (int x = x0; x <= x1; ++x) {
+                const double Y = y + 0.5;
+                const double z = fragmentStored<S>(m, x + 0.5, m.p.b * Y, m.q.b * Y);
+                ASSERT_FALSE(storedNearer<M>(z, r.nearest)) << name << " " << x << "," << y;
+                ASSERT_FALSE(storedNearer<M>(r.farthest, z)) << name << " " << x << "," << y;
+                ++checked;
+              }
+          }
+        }
+      });
+    }
+  EXPECT_GT(bounded, 5000u);
+  EXPECT_GT(checked, 100000u);
+}
+
 // The frame's buffers start on a cache line, so that rows of a width divisible by 16 do too and
 // the resolve can stream whole lines (core/stream-inl.h); std::allocator gives 16 bytes here.
 TEST(Stream, FrameBuffersAreCacheLineAligned) {

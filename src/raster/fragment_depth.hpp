@@ -128,35 +128,22 @@ inline bool storedNearer(double a, double b) {
   else return a < b;
 }
 
-/// Bounds over the convex polygon of `count` (<= 4) corners (px, py), in pixels. With
-/// kFarthest false only `nearest` is computed (`farthest` is "none"): one division less.
+/// The bound on how far a plane's value computed at any point with |x| <= maxX, |y| <= maxY can
+/// be from another point's computed value beyond the true difference: an evaluation errs by at
+/// most ~3 ulps of |a||x| + |b||y| + |c| (three roundings); twice that, with room.
+inline double planeError(const Plane& p, double maxX, double maxY) {
+  constexpr double u = 0x1p-52;
+  return 8 * u * (std::abs(p.a) * maxX + std::abs(p.b) * maxY + std::abs(p.c));
+}
+
+/// Stored values no fragment is nearer / farther than, given that every fragment's computed p
+/// lies in [pMin, pMax] and q in [qMin, qMax] (errors included). "None" (no bound) unless q > 0
+/// and all are finite. With kFarthest false only `nearest` is computed: one division less.
 template <DepthStorage S, DepthMapping M, bool kFarthest = true>
-StoredRange storedRange(const MappedPlanes& m, const double* px, const double* py, int count) {
+StoredRange storedRangeOfBounds(const MappedPlanes& m, double pMin, double pMax, double qMin, double qMax) {
   constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
   constexpr double inf = std::numeric_limits<double>::infinity();
   constexpr StoredRange none{greater ? inf : -inf, greater ? -inf : inf};
-  constexpr double u = 0x1p-52;
-  double maxX = 0, maxY = 0;
-  for (int i = 0; i < count; ++i) {
-    maxX = std::max(maxX, std::abs(px[i]));
-    maxY = std::max(maxY, std::abs(py[i]));
-  }
-  // Any evaluation of a plane over the region errs by at most ~3 ulps of |a||x| + |b||y| + |c|
-  // (three roundings); a corner's computed value and a fragment's can differ by twice that.
-  auto error = [&](const Plane& p) { return 8 * u * (std::abs(p.a) * maxX + std::abs(p.b) * maxY + std::abs(p.c)); };
-  const double pErr = error(m.p), qErr = error(m.q);
-  double pMin = inf, pMax = -inf, qMin = inf, qMax = -inf;
-  for (int i = 0; i < count; ++i) {
-    const double p = m.p.at(px[i], py[i]), q = m.q.at(px[i], py[i]);
-    pMin = std::min(pMin, p);
-    pMax = std::max(pMax, p);
-    qMin = std::min(qMin, q);
-    qMax = std::max(qMax, q);
-  }
-  pMin -= pErr;
-  pMax += pErr;
-  qMin -= qErr;
-  qMax += qErr;
   if (!(qMin > 0) || !std::isfinite(pMin) || !std::isfinite(pMax) || !std::isfinite(qMax)) return none;
   // p / q over [pMin, pMax] x [qMin, qMax], q > 0 (just p when affine: q = 1 and fragments do
   // not divide); then room for the divisions' rounding.
@@ -172,6 +159,44 @@ StoredRange storedRange(const MappedPlanes& m, const double* px, const double* p
   };
   if constexpr (!kFarthest) return greater ? StoredRange{highStored(), none.farthest} : StoredRange{lowStored(), none.farthest};
   return greater ? StoredRange{highStored(), lowStored()} : StoredRange{lowStored(), highStored()};
+}
+
+/// Bounds over the convex polygon of `count` (<= 4) corners (px, py), in pixels. With
+/// kFarthest false only `nearest` is computed (`farthest` is "none"): one division less.
+template <DepthStorage S, DepthMapping M, bool kFarthest = true>
+StoredRange storedRange(const MappedPlanes& m, const double* px, const double* py, int count) {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  double maxX = 0, maxY = 0;
+  for (int i = 0; i < count; ++i) {
+    maxX = std::max(maxX, std::abs(px[i]));
+    maxY = std::max(maxY, std::abs(py[i]));
+  }
+  const double pErr = planeError(m.p, maxX, maxY), qErr = planeError(m.q, maxX, maxY);
+  double pMin = inf, pMax = -inf, qMin = inf, qMax = -inf;
+  for (int i = 0; i < count; ++i) {
+    const double p = m.p.at(px[i], py[i]), q = m.q.at(px[i], py[i]);
+    pMin = std::min(pMin, p);
+    pMax = std::max(pMax, p);
+    qMin = std::min(qMin, q);
+    qMax = std::max(qMax, q);
+  }
+  return storedRangeOfBounds<S, M, kFarthest>(m, pMin - pErr, pMax + pErr, qMin - qErr, qMax + qErr);
+}
+
+/// storedRange over the rectangle [left, right] x [top, bottom] (0 <= left <= right, 0 <= top <=
+/// bottom), with the planes' errors pErr and qErr from planeError for some maxX >= right and
+/// maxY >= bottom (computed once for many rectangles, e.g. a tile's blocks). A plane is extreme
+/// at the corner its slopes point to: evaluated there, as at any corner, its computed value is
+/// within the error of the true extreme.
+template <DepthStorage S, DepthMapping M>
+StoredRange storedRangeOverRect(const MappedPlanes& m, double pErr, double qErr, double left, double right,
+                                double top, double bottom) {
+  const Plane &p = m.p, &q = m.q;
+  const double pMin = p.at(p.a >= 0 ? left : right, p.b >= 0 ? top : bottom);
+  const double pMax = p.at(p.a >= 0 ? right : left, p.b >= 0 ? bottom : top);
+  const double qMin = q.at(q.a >= 0 ? left : right, q.b >= 0 ? top : bottom);
+  const double qMax = q.at(q.a >= 0 ? right : left, q.b >= 0 ? bottom : top);
+  return storedRangeOfBounds<S, M>(m, pMin - pErr, pMax + pErr, qMin - qErr, qMax + qErr);
 }
 
 /// A stored value that no fragment of `t` is nearer than, for storage S and mapping M: every

@@ -231,6 +231,7 @@ void Materialize(const TileJob& job, const TileFrame& f) {
   const MappedPlanes m = plane ? mapPlanes<M>(s.plane->depthNum, s.plane->depthDen, job.depth.near, job.depth.far,
                                               job.depth.orthographic)
                                : MappedPlanes{};
+  const double pErr = planeError(m.p, f.x0 + f.w, f.y0 + f.h), qErr = planeError(m.q, f.x0 + f.w, f.y0 + f.h);
   double tileFar = f.nearestPossible;
   for (int b = 0; b < kBlocksPerTile; ++b) {
     const int bx = (b % (kTileSize / kBlockSize)) * kBlockSize, by = (b / (kTileSize / kBlockSize)) * kBlockSize;
@@ -242,9 +243,8 @@ void Materialize(const TileJob& job, const TileFrame& f) {
     } else if (plane && bx + kBlockSize <= f.w && by + kBlockSize <= f.h) {
       // A block wholly in the image keeps the plane as its uniform state (written only when a
       // triangle lands on it: MaterializeBlock), with the plane's bounds over its corners.
-      const double cx[4] = {f.x0 + bx + 0.5, f.x0 + bx + kBlockSize - 0.5, f.x0 + bx + kBlockSize - 0.5, f.x0 + bx + 0.5};
-      const double cy[4] = {f.y0 + by + 0.5, f.y0 + by + 0.5, f.y0 + by + kBlockSize - 0.5, f.y0 + by + kBlockSize - 0.5};
-      const StoredRange r = storedRange<S, M>(m, cx, cy, 4);
+      const StoredRange r = storedRangeOverRect<S, M>(m, pErr, qErr, f.x0 + bx + 0.5, f.x0 + bx + kBlockSize - 0.5,
+                                                      f.y0 + by + 0.5, f.y0 + by + kBlockSize - 0.5);
       s.blockKey[b] = s.planeKey;
       s.blockTriangle[b] = s.plane;
       s.blockFar[b] = r.farthest;
@@ -502,6 +502,8 @@ void RasterizeTileT(const TileJob& job) {
     const double Y0 = y0 + ry0 + 0.5;
     const V zConstant =
         constantDepth ? hn::Set(d, fragmentStored<S>(m, x0 + rx0 + 0.5, m.p.b * Y0, m.q.b * Y0)) : hn::Zero(d);
+    // The planes' evaluation errors over the tile, for the bounds of its blocks.
+    const double pErr = planeError(m.p, x0 + w, y0 + h), qErr = planeError(m.q, x0 + w, y0 + h);
 
     for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
       for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx) {
@@ -539,11 +541,8 @@ void RasterizeTileT(const TileJob& job) {
         const int blockY1 = std::min(by * kBlockSize + kBlockSize - 1, h - 1);
         if (full && cx0 == bx * kBlockSize && cy0 == by * kBlockSize && cx1 == blockX1 && cy1 == blockY1) {
           StoredRange r{hn::GetLane(zConstant), hn::GetLane(zConstant)};
-          if (!constantDepth) {
-            const double left = x0 + cx0 + 0.5, right = x0 + cx1 + 0.5, top = y0 + cy0 + 0.5, bottom = y0 + cy1 + 0.5;
-            const double cornersX[4] = {left, right, right, left}, cornersY[4] = {top, top, bottom, bottom};
-            r = storedRange<S, M>(m, cornersX, cornersY, 4);
-          }
+          if (!constantDepth)
+            r = storedRangeOverRect<S, M>(m, pErr, qErr, x0 + cx0 + 0.5, x0 + cx1 + 0.5, y0 + cy0 + 0.5, y0 + cy1 + 0.5);
           if (Beaten<M, kIds>(r.nearest, s.blockFar[b])) {
             if constexpr (kCountBlocks) ++count.blocksCulled;
             continue;
