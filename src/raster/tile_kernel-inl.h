@@ -774,14 +774,30 @@ void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
         const size_t at = size_t(y) * kTileSize + size_t(bx) + k;
         uint64_t* keys = s.triangle + at;
         uint64_t* cells = reinterpret_cast<uint64_t*>(s.depth + at);
+        // A row of one triangle, or of two (a key 0 is the background): a vector per triangle
+        // (cubes 1.04x, random 1.06x, sphere 1.03x); rows of more (small triangles) lane by lane
+        // (on the sphere, up to three triangles a vector each was 0.91x, slower).
+        const auto keyV = hn::Load(du, keys);
         const uint64_t first = keys[0];
-        if (first != 0 && hn::AllTrue(du, hn::Eq(hn::Load(du, keys), hn::Set(du, first)))) {
-          const SetupTriangle& t = bins.triangle(first);
+        const auto isFirst = hn::Eq(keyV, hn::Set(du, first));
+        const uint64_t second = hn::AllTrue(du, isFirst) ? first : keys[hn::FindKnownFirstTrue(du, hn::Not(isFirst))];
+        const auto isSecond = hn::Eq(keyV, hn::Set(du, second));
+        if (hn::AllTrue(du, hn::Or(isFirst, isSecond))) {
           const V X = hn::Iota(d, double(x0 + bx + int(k)) + 0.5);
-          const auto eye = hn::BitCast(du32, hn::DemoteTo(df, EyeDepthRow(t, X, Y)));
-          hn::Store(hn::Or(hn::PromoteTo(du, eye), hn::Set(du, PackCell(0, Bits32(int32_t(t.face))))), du, cells);
-          const uint32_t color = kColor ? colorOf(first, t) : 0;
-          hn::Store(hn::Set(du, PackCell(Bits32(int32_t(t.triangle)), color)), du, keys);
+          auto cellV = hn::Set(du, emptyDepth), newKeyV = hn::Set(du, emptyTriangle);
+          for (const uint64_t key : {first, second}) {
+            if (!key) continue;
+            const auto lanes = key == first ? isFirst : isSecond;
+            const SetupTriangle& t = bins.triangle(key);
+            const auto eye = hn::BitCast(du32, hn::DemoteTo(df, EyeDepthRow(t, X, Y)));
+            cellV = hn::IfThenElse(lanes, hn::Or(hn::PromoteTo(du, eye), hn::Set(du, PackCell(0, Bits32(int32_t(t.face))))),
+                                   cellV);
+            const uint32_t color = kColor ? colorOf(key, t) : 0;
+            newKeyV = hn::IfThenElse(lanes, hn::Set(du, PackCell(Bits32(int32_t(t.triangle)), color)), newKeyV);
+            if (key == second) break;  // (a row of one triangle: first == second)
+          }
+          hn::Store(cellV, du, cells);
+          hn::Store(newKeyV, du, keys);
           continue;
         }
         for (size_t j = 0; j < N; ++j) {
