@@ -335,12 +335,12 @@ int run(Options& o) {
   hsrOptions.outputs = hsr::parseFrameOutputs(o.outputs, "--outputs");
   if (!has(hsrOptions.outputs, hsr::FrameOutputs::FaceIds))
     throw InputError("--outputs '" + o.outputs + "': the comparison needs face ids (add face)");
-  hsr::RenderOptions allOptions = hsrOptions;
-  allOptions.outputs = hsr::FrameOutputs::All;
   // Named rasterizers pin what is measured (halfspace: the scalar reference); "default" follows
   // hsr's own default, as `hsr render` and `hsr bench` do.
   if (o.raster == "halfspace") hsrOptions.raster = hsr::RasterKind::HalfSpace;
   if (o.raster == "scanline") hsrOptions.raster = hsr::RasterKind::Scanline;
+  hsr::RenderOptions allOptions = hsrOptions;  // the same, with all four buffers
+  allOptions.outputs = hsr::FrameOutputs::All;
 
   EglContext context(threads);
   const std::string renderer = glString(GL_RENDERER), version = glString(GL_VERSION);

@@ -530,8 +530,8 @@ void RasterizeTileT(const TileJob& job) {
         }
         if constexpr (kCountBlocks) ++(full ? count.blocksFull : count.blocksPartial);
         // A block the triangle covers whole (every pixel centre of the block, in the image):
-        // the triangle's bounds over its corner centres (storedRange; every covered value lies
-        // within them). Behind everything stored there: the block is skipped. In front of it
+        // the triangle's bounds over its corner centres (storedRangeOverRect; every covered
+        // value lies within them). Behind everything stored there: the block is skipped. In front of it
         // all: the block becomes the triangle's plane, in O(1) — parallel to the image plane
         // (every fragment stores zConstant's bits) over any block; sloped, over a block still
         // uniform (cleared, or another plane not yet written out) and with ids (the resolve's
