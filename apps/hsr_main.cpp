@@ -160,10 +160,11 @@ struct ViewFlags {
   std::string scene, cameraFile, size = "1280x720", depthFormat, background;
   std::string raster = "tiled", cull = "none", shading = "lambert";
   bool depthOnly = false;
-  std::string outputs;  // --outputs, empty: all
+  std::string outputs;  // --outputs (not given: all)
   std::string eye, target, up;
   double fov = 0, near = 0, far = 0, ortho = 0;
   CLI::Option *fovFlag = nullptr, *nearFlag = nullptr, *farFlag = nullptr, *orthoFlag = nullptr;
+  CLI::Option* outputsFlag = nullptr;
   hsr::RenderOptions options;  // algorithm and threads: set by CLI11 directly
 
   void declare(CLI::App& cmd) {
@@ -191,7 +192,7 @@ struct ViewFlags {
     CLI::Option* depthOnlyFlag = cmd.add_flag(
         "--depth-only", depthOnly,
         "z-buffer keeps only depth: no face ids or colour; depth is the stored value mapped back to eye depth");
-    cmd.add_option("--outputs", outputs,
+    outputsFlag = cmd.add_option("--outputs", outputs,
                    "Buffers the z-buffer resolves, comma-separated: depth (always), face, triangle, color (default: "
                    "all; depth alone = --depth-only). Buffers not asked for are not written")
         ->type_name("LIST")
@@ -218,7 +219,7 @@ struct ViewFlags {
   // What the z-buffer resolves (checked before the scene is loaded).
   hsr::FrameOutputs frameOutputs() const {
     if (depthOnly) return hsr::FrameOutputs::DepthOnly;
-    return outputs.empty() ? hsr::FrameOutputs::All : hsr::parseFrameOutputs(outputs, "--outputs");
+    return outputsFlag->count() ? hsr::parseFrameOutputs(outputs, "--outputs") : hsr::FrameOutputs::All;
   }
 
   bool openGlFlagsGiven() const {

@@ -242,7 +242,8 @@ TEST_F(CommandLine, BadUsageIsExitTwoWithOneLine) {
         "render builtin:cubes --depth-only --ids i.png", "render builtin:cubes --depth-only --verify", "render",
         "render builtin:cubes --outputs depth,colour", "render builtin:cubes --outputs face --depth-only",
         "render builtin:cubes --outputs depth,face -o c.png", "render builtin:cubes --outputs color --ids i.png",
-        "render builtin:cubes --outputs face,color --verify", "bench builtin:cubes --outputs face,", 
+        "render builtin:cubes --outputs face,color --verify", "bench builtin:cubes --outputs face,",
+        "render builtin:cubes --outputs \"\"", 
         "bench builtin:cubes --frames 0", "help nonsense", ""}) {
     Result r = hsr(args);
     EXPECT_EQ(r.status, 2) << args << "\n" << r;
