@@ -785,17 +785,17 @@ void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
         if (hn::AllTrue(du, hn::Or(isFirst, isSecond))) {
           const V X = hn::Iota(d, double(x0 + bx + int(k)) + 0.5);
           auto cellV = hn::Set(du, emptyDepth), newKeyV = hn::Set(du, emptyTriangle);
-          for (const uint64_t key : {first, second}) {
-            if (!key) continue;
-            const auto lanes = key == first ? isFirst : isSecond;
+          auto blend = [&](uint64_t key, auto lanes) {  // key's lanes get its values (0: background)
+            if (!key) return;
             const SetupTriangle& t = bins.triangle(key);
             const auto eye = hn::BitCast(du32, hn::DemoteTo(df, EyeDepthRow(t, X, Y)));
             cellV = hn::IfThenElse(lanes, hn::Or(hn::PromoteTo(du, eye), hn::Set(du, PackCell(0, Bits32(int32_t(t.face))))),
                                    cellV);
             const uint32_t color = kColor ? colorOf(key, t) : 0;
             newKeyV = hn::IfThenElse(lanes, hn::Set(du, PackCell(Bits32(int32_t(t.triangle)), color)), newKeyV);
-            if (key == second) break;  // (a row of one triangle: first == second)
-          }
+          };
+          blend(first, isFirst);
+          if (second != first) blend(second, isSecond);
           hn::Store(cellV, du, cells);
           hn::Store(newKeyV, du, keys);
           continue;
