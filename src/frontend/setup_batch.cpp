@@ -218,10 +218,14 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
         stepA[i] = hn::Mul(hn::Neg(edy[i]), one);
         stepB[i] = hn::Mul(edx[i], one);
       }
-      for (int oy = 0; oy < kCoverageBox; ++oy) {
+      // Only as many rows and columns as the batch's largest small box has (lanes with smaller
+      // boxes, or none, are masked by rowIn and the column test).
+      const int rows = int(hn::GetLane(hn::MaxOfLanes(d, hn::IfThenElseZero(small, bh))));
+      const int cols = int(hn::GetLane(hn::MaxOfLanes(d, hn::IfThenElseZero(small, bw))));
+      for (int oy = 0; oy < rows; ++oy) {
         V e[3] = {row[0], row[1], row[2]};
         const M rowIn = hn::Lt(hn::Set(d, double(oy)), bh);
-        for (int ox = 0; ox < kCoverageBox; ++ox) {
+        for (int ox = 0; ox < cols; ++ox) {
           M inside = hn::And(rowIn, hn::Lt(hn::Set(d, double(ox)), bw));
           for (int i = 0; i < 3; ++i) {
             inside = hn::And(inside, hn::Ge(e[i], ebias[i]));
