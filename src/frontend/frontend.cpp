@@ -84,9 +84,6 @@ ProjectedVertex projectVertex(const HVertex& v) {
   ProjectedVertex p;
   p.sx = v.hx / v.w;
   p.sy = v.hy / v.w;
-  // Round to the nearest 1/256 pixel (|coordinate| < 2^15 pixels after clipping).
-  p.X = int64_t(std::floor(p.sx * kSubpixelOne + 0.5));
-  p.Y = int64_t(std::floor(p.sy * kSubpixelOne + 0.5));
   p.num = v.d / v.w;  // d/w and 1/w are affine in screen space
   p.den = 1.0 / v.w;
   return p;
@@ -100,8 +97,9 @@ bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, const Cam
 
 bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, const Camera& cam, Cull cull,
                    FrontEndCounters& counters, SetupTriangle& t) {
+  const int64_t X[3] = {v[0].X(), v[1].X(), v[2].X()}, Y[3] = {v[0].Y(), v[1].Y(), v[2].Y()};
   // Twice the signed area on the snapped grid, y down: negative = counter-clockwise as seen.
-  const int64_t area = (v[1].X - v[0].X) * (v[2].Y - v[0].Y) - (v[1].Y - v[0].Y) * (v[2].X - v[0].X);
+  const int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
   if (area == 0) {
     ++counters.degenerate;
     return false;
@@ -116,10 +114,10 @@ bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, c
   double px[3], py[3], ux[3], uy[3], num[3], den[3];
   for (int i = 0; i < 3; ++i) {
     const ProjectedVertex& q = v[order[i]];
-    t.x[i] = int32_t(q.X);
-    t.y[i] = int32_t(q.Y);
-    px[i] = double(q.X) / kSubpixelOne;
-    py[i] = double(q.Y) / kSubpixelOne;
+    t.x[i] = int32_t(X[order[i]]);
+    t.y[i] = int32_t(Y[order[i]]);
+    px[i] = double(X[order[i]]) / kSubpixelOne;
+    py[i] = double(Y[order[i]]) / kSubpixelOne;
     ux[i] = q.sx;
     uy[i] = q.sy;
     num[i] = q.num;
@@ -127,8 +125,8 @@ bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, c
   }
   // Pixels whose centres (x + 1/2) can lie in the box: x in [ceil(min - 1/2), floor(max - 1/2)].
   const int64_t half = kSubpixelOne / 2;
-  const int64_t minX = std::min({v[0].X, v[1].X, v[2].X}), maxX = std::max({v[0].X, v[1].X, v[2].X});
-  const int64_t minY = std::min({v[0].Y, v[1].Y, v[2].Y}), maxY = std::max({v[0].Y, v[1].Y, v[2].Y});
+  const int64_t minX = std::min({X[0], X[1], X[2]}), maxX = std::max({X[0], X[1], X[2]});
+  const int64_t minY = std::min({Y[0], Y[1], Y[2]}), maxY = std::max({Y[0], Y[1], Y[2]});
   const int64_t boxX0 = std::max<int64_t>(0, ceilDiv(minX - half, kSubpixelOne));
   const int64_t boxX1 = std::min<int64_t>(cam.width - 1, floorDiv(maxX - half, kSubpixelOne));
   const int64_t boxY0 = std::max<int64_t>(0, ceilDiv(minY - half, kSubpixelOne));

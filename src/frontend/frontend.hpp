@@ -79,12 +79,20 @@ struct HVertex {
   double hx, hy, d, w;
 };
 
-/// A vertex inside the clip volume, projected once and shared by all its triangles.
+/// A pixel coordinate snapped to 1/256 pixel: rounded to the nearest (|s| < 2^15 pixels after
+/// clipping, so the result is exact in int64 and in double).
+inline int64_t snapCoordinate(double s) { return int64_t(std::floor(s * kSubpixelOne + 0.5)); }
+
+/// A vertex inside the clip volume, projected once and shared by all its triangles. 32 bytes (the
+/// vertex pass writes one per scene vertex, set-up gathers them): the snapped position is not
+/// stored but computed where it is needed, X() and Y().
 struct ProjectedVertex {
   double sx, sy;   // pixel position (unsnapped)
-  int64_t X, Y;    // snapped to 1/256 pixel
   double num, den; // d/w and 1/w, both affine in screen space
+  int64_t X() const { return snapCoordinate(sx); }  // snapped to 1/256 pixel
+  int64_t Y() const { return snapCoordinate(sy); }
 };
+static_assert(sizeof(ProjectedVertex) == 32);
 
 /// Why triangles were not drawn, counted per scene triangle or clipped piece.
 struct FrontEndCounters {

@@ -148,22 +148,23 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
   if (!depth) deferred = nullptr;  // (a deferred face needs its nearest bound)
   for (size_t first = 0; first < count; first += N) {
     const size_t lanes = std::min(N, count - first);
-    // Gather each vertex's fields (ProjectedVertex: sx, sy, X, Y, num, den; 6 x 8 bytes).
+    // Gather each vertex's fields (ProjectedVertex: sx, sy, num, den; 4 x 8 bytes), and snap
+    // (snapCoordinate: an integer below 2^23, the same in double as in int64).
     HWY_ALIGN int64_t offset[3][kSetupBatch];
     for (int k = 0; k < 3; ++k)
       for (size_t j = 0; j < N; ++j)
         offset[k][j] = int64_t(vertex[k][first + std::min(j, lanes - 1)]) * int64_t(sizeof(ProjectedVertex) / 8);
     const double* base = reinterpret_cast<const double*>(projected);
-    const int64_t* baseI = reinterpret_cast<const int64_t*>(projected);
+    const V subpixel = hn::Set(d, double(kSubpixelOne)), halfUnit = hn::Set(d, 0.5);
     V sx[3], sy[3], X[3], Y[3], num[3], den[3];
     for (int k = 0; k < 3; ++k) {
       const auto idx = hn::Load(di, offset[k]);
       sx[k] = hn::GatherIndex(d, base + 0, idx);
       sy[k] = hn::GatherIndex(d, base + 1, idx);
-      X[k] = hn::ConvertTo(d, hn::GatherIndex(di, baseI + 2, idx));
-      Y[k] = hn::ConvertTo(d, hn::GatherIndex(di, baseI + 3, idx));
-      num[k] = hn::GatherIndex(d, base + 4, idx);
-      den[k] = hn::GatherIndex(d, base + 5, idx);
+      num[k] = hn::GatherIndex(d, base + 2, idx);
+      den[k] = hn::GatherIndex(d, base + 3, idx);
+      X[k] = hn::Floor(hn::Add(hn::Mul(sx[k], subpixel), halfUnit));
+      Y[k] = hn::Floor(hn::Add(hn::Mul(sy[k], subpixel), halfUnit));
     }
     const V zero = hn::Zero(d);
     // Twice the signed area on the snapped grid (exact).
@@ -345,14 +346,13 @@ void TransformVertices(const dvec3* positions, size_t count, const dmat4& matrix
   static_assert(sizeof(dvec3) == 3 * sizeof(double));
   const D d;
   const size_t N = hn::Lanes(d);
-  const hn::Rebind<int64_t, D> di;
   V m[4][4];
   for (int c = 0; c < 4; ++c)
     for (int r = 0; r < 4; ++r) m[c][r] = hn::Set(d, matrix[c][r]);
   const V zero = hn::Zero(d), nearV = hn::Set(d, cam.near), farV = hn::Set(d, cam.far);
   const V gx0 = hn::Set(d, -kGuardBandPixels), gx1 = hn::Set(d, cam.width + kGuardBandPixels);
   const V gy0 = hn::Set(d, -kGuardBandPixels), gy1 = hn::Set(d, cam.height + kGuardBandPixels);
-  const V subpixel = hn::Set(d, double(kSubpixelOne)), half = hn::Set(d, 0.5), one = hn::Set(d, 1.0);
+  const V one = hn::Set(d, 1.0);
   const double* in = reinterpret_cast<const double*>(positions);
   for (size_t first = 0; first < count; first += N) {
     const size_t lanes = std::min(N, count - first);
@@ -375,23 +375,24 @@ void TransformVertices(const dvec3* positions, size_t count, const dmat4& matrix
     const M outside[6] = {hn::Lt(hn::Sub(depth, nearV), zero),      hn::Lt(hn::Sub(farV, depth), zero),
                           hn::Lt(hn::Sub(hx, hn::Mul(gx0, w)), zero), hn::Lt(hn::Sub(hn::Mul(gx1, w), hx), zero),
                           hn::Lt(hn::Sub(hy, hn::Mul(gy0, w)), zero), hn::Lt(hn::Sub(hn::Mul(gy1, w), hy), zero)};
-    // projectVertex: every lane (those outside are not stored).
+    // projectVertex: every lane.
     const V sx = hn::Div(hx, w), sy = hn::Div(hy, w);
-    const V X = hn::Floor(hn::Add(hn::Mul(sx, subpixel), half)), Y = hn::Floor(hn::Add(hn::Mul(sy, subpixel), half));
     const V num = hn::Div(depth, w), den = hn::Div(one, w);
     uint8_t bits[6][8] = {};
     for (int p = 0; p < 6; ++p) hn::StoreMaskBits(d, outside[p], bits[p]);
-    HWY_ALIGN double l[6][kSetupBatch];
-    HWY_ALIGN int64_t li[2][kSetupBatch];
-    hn::Store(sx, d, l[0]), hn::Store(sy, d, l[1]), hn::Store(num, d, l[4]), hn::Store(den, d, l[5]);
-    // In the clip volume |X|, |Y| < 2^23 (the guard band): the conversion is exact. Elsewhere
-    // the value is not used.
-    hn::Store(hn::ConvertTo(di, X), di, li[0]), hn::Store(hn::ConvertTo(di, Y), di, li[1]);
     for (size_t j = 0; j < lanes; ++j) {
       uint8_t code = 0;
       for (int p = 0; p < 6; ++p) code |= uint8_t(((bits[p][0] >> j) & 1) << p);
       outcodes[first + j] = code;
-      if (!code) projected[first + j] = {l[0][j], l[1][j], li[0][j], li[1][j], l[4][j], l[5][j]};
+    }
+    if (lanes == N) {  // N whole records at once (a vertex outside gets values no triangle reads)
+      static_assert(sizeof(ProjectedVertex) == 4 * sizeof(double));
+      hn::StoreInterleaved4(sx, sy, num, den, d, reinterpret_cast<double*>(projected + first));
+    } else {
+      HWY_ALIGN double l[4][kSetupBatch];
+      hn::Store(sx, d, l[0]), hn::Store(sy, d, l[1]), hn::Store(num, d, l[2]), hn::Store(den, d, l[3]);
+      for (size_t j = 0; j < lanes; ++j)
+        if (!outcodes[first + j]) projected[first + j] = {l[0][j], l[1][j], l[2][j], l[3][j]};
     }
   }
 }
