@@ -9,6 +9,7 @@
 #include <map>
 #include <random>
 
+#include "core/shading.hpp"
 #include "core/stream_fill.hpp"
 #include "frontend/frontend.hpp"
 #include "raster/fragment_depth.hpp"
@@ -369,6 +370,70 @@ TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
   }
   hwy::SetSupportedTargetsForTest(0);
   EXPECT_GE(targets, 2);
+}
+
+// The batched Lambert shading (TriangleShader::lambertFactors and shadeMany, SIMD) gives bit for
+// bit the scalar factor and colour of every triangle, on every instruction set, perspective and
+// orthographic, any count: triangles that are their own face (the SIMD path), quads' triangles
+// (one by one), slivers; a scene with quads, and one of triangles only (every triangle its own
+// face: a shortcut).
+TEST(Raster, BatchedShadingEqualsScalarOnEveryInstructionSet) {
+  for (bool quads : {true, false}) {
+    std::mt19937_64 rng(83);
+    std::uniform_real_distribution<double> u(-5, 5);
+    std::uniform_int_distribution<int> c(0, 255);
+    Scene scene;
+    for (int i = 0; i < 300; ++i) {
+      const uint32_t first = uint32_t(scene.positions.size());
+      const dvec3 a{u(rng), u(rng), u(rng)};
+      const int kind = i % (quads ? 5 : 4);
+      scene.positions.push_back(a);
+      scene.positions.push_back(a + dvec3(u(rng), u(rng), u(rng)));
+      scene.positions.push_back(kind == 3 ? a + (scene.positions.back() - a) * 0.5 + dvec3(0, 1e-7, 0)  // sliver
+                                          : a + dvec3(u(rng), u(rng), u(rng)));
+      const Rgba8 color{uint8_t(c(rng)), uint8_t(c(rng)), uint8_t(c(rng)), uint8_t(c(rng))};
+      if (kind == 4) {  // a planar quad: two triangles of a four-vertex face
+        scene.positions.push_back(scene.positions[first + 2] + (scene.positions[first] - scene.positions[first + 1]));
+        scene.addFace({first, first + 1, first + 2, first + 3}, color);
+      } else {
+        scene.addFace({first, first + 1, first + 2}, color);
+      }
+    }
+    scene.finalize();
+    ASSERT_EQ(scene.triangles.size(), quads ? 360u : 300u);
+    std::vector<uint32_t> all(scene.triangles.size());
+    for (size_t i = 0; i < all.size(); ++i) all[i] = uint32_t(all.size() - 1 - i);  // (any order)
+    CameraSpec perspective;
+    perspective.eye = {3, 4, 20};
+    CameraSpec orthographic = perspective;
+    orthographic.orthoHeight = 12;
+    int targets = 0;
+    for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
+      hwy::SetSupportedTargetsForTest(target);
+      ++targets;
+      for (const CameraSpec& spec : {perspective, orthographic}) {
+        const Camera cam = resolveCamera(spec, 64, 48, scene.bounds());
+        const TriangleShader shade(scene, cam, Shading::Lambert);
+        for (size_t count : {size_t(0), size_t(1), size_t(9), all.size()}) {
+          std::vector<double> factors(count);
+          std::vector<Rgba8> colors(count);
+          shade.lambertFactors(all.data(), count, factors.data());
+          shade.shadeMany(all.data(), count, colors.data());
+          for (size_t i = 0; i < count; ++i) {
+            const std::string what = std::string(hwy::TargetName(target)) +
+                                     (cam.orthographic ? " orthographic" : " perspective") + " triangle " +
+                                     std::to_string(all[i]);
+            const double factor = shade.lambertFactor(all[i]);
+            ASSERT_EQ(std::memcmp(&factor, &factors[i], sizeof factor), 0) << what;
+            const Rgba8 color = shade(all[i]);
+            ASSERT_EQ(std::memcmp(&color, &colors[i], sizeof color), 0) << what;
+          }
+        }
+      }
+    }
+    hwy::SetSupportedTargetsForTest(0);
+    EXPECT_GE(targets, 2);
+  }
 }
 
 // The SIMD vertex pass gives bit for bit transformVertex, clipOutcode and projectVertex, on

@@ -13,7 +13,10 @@ Rgba8 faceIdColor(uint32_t face) {
 }
 
 TriangleShader::TriangleShader(const Scene& scene, const Camera& camera, Shading shading)
-    : scene_(scene), shading_(shading), orthographic_(camera.orthographic) {
+    : scene_(scene),
+      shading_(shading),
+      orthographic_(camera.orthographic),
+      ownFaces_(scene.triangles.size() == scene.faceCount() && scene.polygonIndices.size() == 3 * scene.faceCount()) {
   dmat4 worldFromCamera = glm::inverse(camera.cameraFromWorld);
   eye_ = dvec3(worldFromCamera * dvec4(0, 0, 0, 1));
   forward_ = dvec3(worldFromCamera * dvec4(0, 0, 1, 0));
@@ -22,8 +25,13 @@ TriangleShader::TriangleShader(const Scene& scene, const Camera& camera, Shading
 Rgba8 TriangleShader::operator()(uint32_t t) const {
   const Triangle& tri = scene_.triangles[t];
   if (shading_ == Shading::FaceId) return faceIdColor(tri.face);
-  Rgba8 base = scene_.faceColors[tri.face];
+  const Rgba8 base = scene_.faceColors[tri.face];
   if (shading_ == Shading::Flat) return base;
+  return lambertColor(base, lambertFactor(t));
+}
+
+double TriangleShader::lambertFactor(uint32_t t) const {
+  const Triangle& tri = scene_.triangles[t];
   // Headlight: light from the eye; two-sided, so |cos| of the angle between the face normal and
   // the view ray to the face's centroid. Per face, so a polygon's triangles shade alike.
   const dvec3& a = scene_.positions[tri.v[0]];
@@ -41,9 +49,7 @@ Rgba8 TriangleShader::operator()(uint32_t t) const {
   }
   const double ln2 = glm::dot(n, n) * glm::dot(view, view);
   const double cosine = ln2 > 0 ? std::abs(glm::dot(n, view)) / std::sqrt(ln2) : 1.0;
-  double k = 0.25 + 0.75 * cosine;
-  auto scale = [k](uint8_t v) { return uint8_t(v * k + 0.5); };
-  return Rgba8{scale(base.r), scale(base.g), scale(base.b), base.a};
+  return 0.25 + 0.75 * cosine;
 }
 
 Rgba8 shadeTriangle(const Scene& scene, const Camera& camera, const RenderOptions& options, uint32_t t) {

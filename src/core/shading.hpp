@@ -8,11 +8,26 @@ namespace hsr {
 /// A distinct, deterministic colour for face `face` (used by Shading::FaceId).
 Rgba8 faceIdColor(uint32_t face);
 
+/// `base` scaled by the Lambert factor k (0.25 + 0.75 |cos|), alpha kept.
+inline Rgba8 lambertColor(Rgba8 base, double k) {
+  auto scale = [k](uint8_t v) { return uint8_t(v * k + 0.5); };
+  return Rgba8{scale(base.r), scale(base.g), scale(base.b), base.a};
+}
+
 /// Shades scene triangles for one camera; construct once per frame.
 class TriangleShader {
  public:
   TriangleShader(const Scene& scene, const Camera& camera, Shading shading);
   Rgba8 operator()(uint32_t triangleIndex) const;
+  /// out[i] = (*this)(triangles[i]) for i < count, bit for bit; Lambert shades with SIMD
+  /// (core/shading_batch.cpp).
+  void shadeMany(const uint32_t* triangles, size_t count, Rgba8* out) const;
+  /// Shading::Lambert's factor for a triangle: 0.25 + 0.75 |cos|, the cosine between its face's
+  /// normal and the view ray to the face's centroid (two-sided headlight).
+  double lambertFactor(uint32_t triangleIndex) const;
+  /// factor[i] = lambertFactor(triangles[i]) for i < count, bit for bit, with SIMD for the
+  /// triangles that are their own face (the polygon's three vertices in the triangle's order).
+  void lambertFactors(const uint32_t* triangles, size_t count, double* factor) const;
 
  private:
   const Scene& scene_;
@@ -20,6 +35,14 @@ class TriangleShader {
   bool orthographic_;
   dvec3 eye_;      // world position of the eye (perspective)
   dvec3 forward_;  // world view direction (orthographic)
+  // Whether every triangle is its own face (three vertices, in the triangle's order: a face of
+  // three vertices is one triangle, so when there are as many triangles as faces and three
+  // indices a face, each face made its triangle).
+  bool ownFaces_;
+  bool ownFace(const Triangle& tri) const {
+    const auto polygon = scene_.face(tri.face);
+    return polygon.size() == 3 && polygon[0] == tri.v[0] && polygon[1] == tri.v[1] && polygon[2] == tri.v[2];
+  }
 };
 
 /// Colour of one triangle (convenience; builds a TriangleShader, so prefer that in loops).

@@ -364,8 +364,7 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
   double batchNearest[kBatch];
   DeferredFace batchDeferred[kBatch];
   size_t batched = 0;
-  auto keep = [&](SetupTriangle& t, double nearest) {  // front faces shaded (see triangleColor)
-    t.color = color && t.frontFacing ? shade(t.triangle) : Rgba8{};
+  auto keep = [&](const SetupTriangle& t, double nearest) {
     if (out.triangles.size() + 48 < out.triangles.capacity())
       __builtin_prefetch(out.triangles.data() + out.triangles.size() + 48, 1, 3);
     out.triangles.push_back(t);
@@ -376,6 +375,16 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
     size_t deferred = 0;
     const size_t n = setupBatch(fe.projected.data(), vertex, batchTriangle, batchFace, batched, cam, options.cull,
                                 counters, batchOut, depth, batchNearest, defer ? batchDeferred : nullptr, &deferred);
+    // Front faces shaded (see triangleColor), many at once.
+    uint32_t front[kBatch], at[kBatch];
+    size_t fronts = 0;
+    for (size_t i = 0; i < n; ++i) {
+      batchOut[i].color = Rgba8{};
+      if (color && batchOut[i].frontFacing) front[fronts] = batchOut[i].triangle, at[fronts++] = uint32_t(i);
+    }
+    Rgba8 colors[kBatch];
+    shade.shadeMany(front, fronts, colors);
+    for (size_t j = 0; j < fronts; ++j) batchOut[at[j]].color = colors[j];
     for (size_t i = 0; i < n; ++i) keep(batchOut[i], batchNearest[i]);
     out.deferred.insert(out.deferred.end(), batchDeferred, batchDeferred + deferred);
     batched = 0;
@@ -426,8 +435,10 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
     // The clipped polygon is convex: fan it. Every piece keeps the triangle's and face's index.
     for (int i = 1; i + 1 < n; ++i) {
       HVertex piece[3] = {poly[0], poly[i], poly[i + 1]};
-      if (setupTriangle(piece, uint32_t(ti), tri.face, cam, options.cull, counters, st))
+      if (setupTriangle(piece, uint32_t(ti), tri.face, cam, options.cull, counters, st)) {
+        st.color = color && st.frontFacing ? shade(st.triangle) : Rgba8{};
         keep(st, depth ? nearestStored(st, *depth) : 0.0);
+      }
     }
   }
   if (batched) flush();
