@@ -438,6 +438,7 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
   // Whether nothing nearer than `nearest` can show in the tile-local box [x0, x1] x [y0, y1].
   auto hidden = [&](double nearest, int x0, int y0, int x1, int y1) {
     if (s.state != TileState::Pixels) return beaten(nearest, uniformFar);
+    if (beaten(nearest, s.tileFar)) return true;  // (behind the farthest value of the tile: of every block)
     for (int by = y0 / kBlockSize; by <= y1 / kBlockSize; ++by)
       for (int bx = x0 / kBlockSize; bx <= x1 / kBlockSize; ++bx)
         if (!beaten(nearest, s.blockFar[by * kBlocksX + bx])) return false;
