@@ -35,11 +35,20 @@ HWY_EXPORT(FlushStreams);
 void Bins::countEntries() {
   const size_t tiles = size_t(tileCount());
   tileEntries.assign(3 * tiles, 0);
-  for (size_t s = 0; s < 3; ++s) {
-    const std::vector<ChunkBins>& set = s == 0 ? chunks : s == 1 ? late : clusters;
-    for (size_t c = 0; c < chunkCount; ++c)
-      for (size_t t = 0; t < tiles; ++t) tileEntries[s * tiles + t] += set[c].start[t + 1] - set[c].start[t];
-  }
+  tileChunkStart.assign(tiles + 1, 0);
+  for (size_t c = 0; c < chunkCount; ++c)
+    for (uint32_t t : chunks[c].touched) {
+      tileEntries[t] += chunks[c].start[t + 1] - chunks[c].start[t];
+      tileEntries[tiles + t] += late[c].start[t + 1] - late[c].start[t];
+      tileEntries[2 * tiles + t] += clusters[c].start[t + 1] - clusters[c].start[t];
+      ++tileChunkStart[t + 1];
+    }
+  for (size_t t = 0; t < tiles; ++t) tileChunkStart[t + 1] += tileChunkStart[t];
+  tileChunks.resize(tileChunkStart[tiles]);
+  for (size_t c = 0; c < chunkCount; ++c)
+    for (uint32_t t : chunks[c].touched) tileChunks[tileChunkStart[t]++] = uint32_t(c);
+  for (size_t t = tiles; t > 0; --t) tileChunkStart[t] = tileChunkStart[t - 1];  // back to the beginnings
+  tileChunkStart[0] = 0;
 }
 
 size_t Bins::entries(int tile, bool inLate) const {
@@ -61,12 +70,13 @@ uint64_t Bins::culled() const {
 }
 
 uint64_t Bins::memoryBytes() const {
-  uint64_t bytes = records.capacity() * sizeof(void*) + tileEntries.capacity() * sizeof(uint32_t);
+  uint64_t bytes = records.capacity() * sizeof(void*) +
+                   (tileEntries.capacity() + tileChunkStart.capacity() + tileChunks.capacity()) * sizeof(uint32_t);
   for (const std::vector<ChunkBins>* set : {&chunks, &late, &clusters})
     for (const ChunkBins& c : *set)
       bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.pairs.capacity() * sizeof(uint64_t) +
                (c.itemNearest.capacity() + c.cover.capacity() + c.slotNearest.capacity()) * sizeof(double) +
-               c.itemBox.capacity() * sizeof(uint32_t) + c.records.capacity() * sizeof(SetupTriangle) +
+               (c.itemBox.capacity() + c.touched.capacity()) * sizeof(uint32_t) + c.records.capacity() * sizeof(SetupTriangle) +
                c.setUpCapacity + c.survivors.capacity() + sizeof(c);
   return bytes;
 }
@@ -339,6 +349,10 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
       cl.itemBox[item] = x0 | y0 << 8 | x1 << 16 | y1 << 24;
     }
   }
+  cb.touched.clear();
+  for (size_t t = 0; t < tiles; ++t)
+    if (cb.start[t + 1] > cb.start[t] || late.start[t + 1] > late.start[t] || cl.start[t + 1] > cl.start[t])
+      cb.touched.push_back(uint32_t(t));
 }
 
 uint64_t TileOrder::memoryBytes() const {
@@ -352,7 +366,7 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater
   TileEntry* entry = in.data();
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   bool finite = true;
-  for (size_t c = 0; c < bins.chunkCount; ++c) {
+  bins.forChunksOf(tile, [&](size_t c) {
     const ChunkBins& cb = bins.chunks[c];
     const uint64_t chunkKey = triangleKey(c, 0);  // + localKey
     for (uint32_t item = cb.start[size_t(tile)], end = cb.start[size_t(tile) + 1]; item < end; ++item) {
@@ -362,7 +376,7 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater
       hi = std::max(hi, v);
       finite &= v - v == 0;  // false for infinities and NaN
     }
-  }
+  });
   if (in.size() < 2 || !finite || !(hi > lo) || !std::isfinite(hi - lo)) return in;  // (unsorted: any order is right)
   // Counting sort into buckets of equal width between the extreme bounds, nearest bucket first.
   constexpr int kBuckets = 32;
@@ -464,55 +478,58 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
     counters.setUpLate += n;
     batched = 0;
   };
-  // (Each set is a walk over every chunk's lists: skipped when countEntries says it is empty here.)
+  // (Each set is a walk over the lists of the chunks with items here: skipped when countEntries
+  // says the set is empty here.)
   const size_t tiles = size_t(bins.tileCount());
   const bool anyFaces = bins.tileEntries.empty() || bins.tileEntries[tiles + size_t(tile)] > 0;
   const bool anyClusters = bins.tileEntries.empty() || bins.tileEntries[2 * tiles + size_t(tile)] > 0;
-  for (size_t c = 0; c < bins.chunkCount && anyFaces; ++c) {
-    const ChunkBins& cb = bins.late[c];
-    for (uint32_t item = cb.start[size_t(tile)], end = cb.start[size_t(tile) + 1]; item < end; ++item) {
-      const double nearest = cb.itemNearest[item];
-      if (boxHidden(nearest, cb.itemBox[item])) {
-        ++counters.culledTiles;
-        continue;
-      }
-      const uint32_t local = cb.items[item], i = localIndex(local);
-      const DeferredFace& f = cb.faces[i];
-      if (batched && (c != batchChunk || batched == kBatch)) flush();
-      batchChunk = c;
-      for (int k = 0; k < 3; ++k) vertex[k][batched] = f.v[k];
-      tri[batched] = f.triangle;
-      face[batched] = f.face;
-      index[batched++] = i;
-      order.late.push_back({triangleKey(c, local), nearest});
-    }
-  }
-  if (batched) flush();
-  const int tx0 = (tile % bins.tilesX) * kTileSize, ty0 = (tile / bins.tilesX) * kTileSize;
-  for (size_t c = 0; c < bins.chunkCount && anyClusters; ++c) {
-    const ChunkBins& cl = bins.clusters[c];
-    const uint32_t firstTriangle = uint32_t(c * kChunkTriangles);
-    for (uint32_t item = cl.start[size_t(tile)], end = cl.start[size_t(tile) + 1]; item < end; ++item) {
-      if (boxHidden(cl.itemNearest[item], cl.itemBox[item])) {
-        counters.culledTiles += kClusterTriangles;
-        continue;
-      }
-      const size_t k = cl.items[item];
-      setUpCluster(bins, c, k, depth, counters);
-      const SetupTriangle* records = bins.late[c].records.data();
-      for (uint32_t slot = cl.clusterSlot(k), last = slot + cl.survivors[k]; slot < last; ++slot) {
-        const SetupTriangle& t = records[slot];
-        const int x0 = std::max(t.minX - tx0, 0), x1 = std::min(t.maxX - tx0, kTileSize - 1);
-        const int y0 = std::max(t.minY - ty0, 0), y1 = std::min(t.maxY - ty0, kTileSize - 1);
-        if (x0 > x1 || y0 > y1) continue;  // (not in this tile)
-        if (hidden(cl.slotNearest[slot], x0, y0, x1, y1)) {
+  if (anyFaces)
+    bins.forChunksOf(tile, [&](size_t c) {
+      const ChunkBins& cb = bins.late[c];
+      for (uint32_t item = cb.start[size_t(tile)], end = cb.start[size_t(tile) + 1]; item < end; ++item) {
+        const double nearest = cb.itemNearest[item];
+        if (boxHidden(nearest, cb.itemBox[item])) {
           ++counters.culledTiles;
           continue;
         }
-        order.late.push_back({triangleKey(c, localKey(t.triangle - firstTriangle, true, slot)), cl.slotNearest[slot]});
+        const uint32_t local = cb.items[item], i = localIndex(local);
+        const DeferredFace& f = cb.faces[i];
+        if (batched && (c != batchChunk || batched == kBatch)) flush();
+        batchChunk = c;
+        for (int k = 0; k < 3; ++k) vertex[k][batched] = f.v[k];
+        tri[batched] = f.triangle;
+        face[batched] = f.face;
+        index[batched++] = i;
+        order.late.push_back({triangleKey(c, local), nearest});
       }
-    }
-  }
+    });
+  if (batched) flush();
+  const int tx0 = (tile % bins.tilesX) * kTileSize, ty0 = (tile / bins.tilesX) * kTileSize;
+  if (anyClusters)
+    bins.forChunksOf(tile, [&](size_t c) {
+      const ChunkBins& cl = bins.clusters[c];
+      const uint32_t firstTriangle = uint32_t(c * kChunkTriangles);
+      for (uint32_t item = cl.start[size_t(tile)], end = cl.start[size_t(tile) + 1]; item < end; ++item) {
+        if (boxHidden(cl.itemNearest[item], cl.itemBox[item])) {
+          counters.culledTiles += kClusterTriangles;
+          continue;
+        }
+        const size_t k = cl.items[item];
+        setUpCluster(bins, c, k, depth, counters);
+        const SetupTriangle* records = bins.late[c].records.data();
+        for (uint32_t slot = cl.clusterSlot(k), last = slot + cl.survivors[k]; slot < last; ++slot) {
+          const SetupTriangle& t = records[slot];
+          const int x0 = std::max(t.minX - tx0, 0), x1 = std::min(t.maxX - tx0, kTileSize - 1);
+          const int y0 = std::max(t.minY - ty0, 0), y1 = std::min(t.maxY - ty0, kTileSize - 1);
+          if (x0 > x1 || y0 > y1) continue;  // (not in this tile)
+          if (hidden(cl.slotNearest[slot], x0, y0, x1, y1)) {
+            ++counters.culledTiles;
+            continue;
+          }
+          order.late.push_back({triangleKey(c, localKey(t.triangle - firstTriangle, true, slot)), cl.slotNearest[slot]});
+        }
+      }
+    });
 }
 
 }  // namespace

@@ -93,6 +93,9 @@ struct ChunkBins {
                                 // (Bins::late: each deferred face's tile)
   std::vector<double> cover;    // scratch of binChunk(): per tile, the bound of its covering triangles
   uint64_t culled = 0;          // triangle-tile pairs not binned: behind a triangle covering the tile
+  // Bins::chunks only: the tiles that have items of this chunk in any of the three sets (chunks,
+  // late, clusters), in order (binChunk), for countEntries' per-tile chunk lists.
+  std::vector<uint32_t> touched;
   // Bins::late only: per item, the face's pixel box in its tile (x0, y0, x1, y1: a byte each,
   // tile-local), next to the item for the tile pass's test; the chunk's deferred back faces
   // (FrontEndChunk::deferred) and their records, written by rasterizeTile when one may show (only
@@ -134,6 +137,21 @@ struct Bins {
 
   // countEntries(): per tile, its items in chunks, late and clusters (all chunks); empty until then.
   std::vector<uint32_t> tileEntries;
+  // countEntries(): per tile, the chunks that have items there (in any set), in chunk order:
+  // tileChunks[tileChunkStart[t], tileChunkStart[t + 1]). (A tile's lists are read through these,
+  // not by a walk over every chunk.)
+  std::vector<uint32_t> tileChunkStart, tileChunks;
+  /// Calls f(chunk) for every chunk that may have items in `tile`, in chunk order: those
+  /// countEntries() listed, or every chunk before it has run.
+  template <class F>
+  void forChunksOf(int tile, F&& f) const {
+    if (tileChunkStart.empty()) {
+      for (size_t c = 0; c < chunkCount; ++c) f(c);
+      return;
+    }
+    for (uint32_t i = tileChunkStart[size_t(tile)], end = tileChunkStart[size_t(tile) + 1]; i < end; ++i)
+      f(size_t(tileChunks[i]));
+  }
 
   int tileCount() const { return tilesX * tilesY; }
   /// Items of `tile` in `chunks` (or in `late` and `clusters`): a sum over the chunks, or a look-up
