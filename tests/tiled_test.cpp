@@ -247,6 +247,55 @@ TEST(Tiled, IdenticalOnOddImageSizes) {
     }
 }
 
+// countEntries' per-tile chunk lists name, in chunk order, exactly the chunks with something in
+// the tile — a triangle, a deferred back face or a deferred cluster — and its counts are the
+// lists' lengths; before countEntries (and after prepareBins) every chunk is walked.
+TEST(Tiled, PerTileChunkListsNameEveryChunkWithItemsThere) {
+  const Scene scene = loadScene("builtin:sphere?n=60000");
+  const Camera cam = resolveCamera(frameBounds(scene.bounds()), 320, 240, scene.bounds());
+  const DepthSetup depth{DepthFormat{}, cam.near, cam.far, cam.orthographic};
+  FrontEndOutput fe;
+  runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth, true);
+  ASSERT_GT(fe.chunkCount, 4u);
+  tiled::Bins bins;
+  tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
+  for (size_t c = 0; c < fe.chunkCount; ++c) tiled::binChunk(bins, c, fe.chunks[c], &depth);
+  const size_t tiles = size_t(bins.tileCount());
+  auto walked = [&](int tile) {
+    std::vector<size_t> chunks;
+    bins.forChunksOf(tile, [&](size_t c) { chunks.push_back(c); });
+    return chunks;
+  };
+  EXPECT_EQ(walked(0).size(), fe.chunkCount);  // (no lists yet: every chunk)
+  bins.countEntries();
+  size_t sets[3] = {0, 0, 0}, listedPairs = 0;
+  for (size_t t = 0; t < tiles; ++t) {
+    std::vector<size_t> expected;
+    uint32_t count[3] = {0, 0, 0};
+    for (size_t c = 0; c < fe.chunkCount; ++c) {
+      bool any = false;
+      for (int s = 0; s < 3; ++s) {
+        const tiled::ChunkBins& cb = (s == 0 ? bins.chunks : s == 1 ? bins.late : bins.clusters)[c];
+        const uint32_t n = cb.start[t + 1] - cb.start[t];
+        count[s] += n;
+        sets[s] += n;
+        any |= n > 0;
+      }
+      if (any) expected.push_back(c);
+    }
+    EXPECT_EQ(walked(int(t)), expected) << "tile " << t;
+    EXPECT_LT(expected.size(), fe.chunkCount) << "tile " << t;  // (the point: not every chunk)
+    for (int s = 0; s < 3; ++s) EXPECT_EQ(bins.tileEntries[size_t(s) * tiles + t], count[s]) << "tile " << t;
+    listedPairs += expected.size();
+  }
+  EXPECT_GT(sets[0], 0u);  // triangles, deferred faces and deferred clusters all binned somewhere
+  EXPECT_GT(sets[1], 0u);
+  EXPECT_GT(sets[2], 0u);
+  EXPECT_GT(listedPairs, 0u);
+  tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);  // a new frame: the lists are gone
+  EXPECT_EQ(walked(0).size(), fe.chunkCount);
+}
+
 // Binning chunk by chunk, in any order, gives per-tile lists that, read in chunk order, list
 // every triangle touching the tile once, in submission order; the nearest bounds do not depend
 // on the order either.

@@ -2,7 +2,8 @@
 // time): TriangleShader::operator() (shading.cpp) lane by lane, with the same IEEE operations in
 // the same order, for triangles whose face is the triangle itself (its polygon's three vertices
 // in the triangle's order), so every lane gets the scalar function's bits
-// (tests/shading_test.cpp). Used by the front end for the front faces it keeps.
+// (tests/raster_test.cpp, Raster.BatchedShadingEqualsScalarOnEveryInstructionSet). Used by the
+// front end for the front faces it keeps.
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "core/shading_batch.cpp"

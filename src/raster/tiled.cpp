@@ -233,6 +233,8 @@ void prepareBins(Bins& bins, int width, int height, size_t chunkCount) {
   bins.camera = nullptr;
   bins.sceneTriangles = nullptr;
   bins.tileEntries.clear();
+  bins.tileChunkStart.clear();  // (until countEntries: every chunk is walked)
+  bins.tileChunks.clear();
 }
 
 namespace {
