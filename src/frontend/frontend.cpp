@@ -396,6 +396,10 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
     const Triangle& tri = scene.triangles[ti];
     if (clusters && ti % kClusterTriangles == 0 && fe.faceVisible[tri.face]) {  // (a cluster is in one mesh)
       const TriangleCluster& cluster = scene.clusters[ti / kClusterTriangles];
+      if (ti + kClusterTriangles < end) {  // the next cluster (a culled or deferred one is skipped: no stream to follow)
+        __builtin_prefetch(&cluster + 1);
+        __builtin_prefetch(&scene.triangles[ti + kClusterTriangles]);
+      }
       if (options.cull == Cull::Back) {  // each of its triangles a back face: culled, as set-up would
         if (cullCluster(cluster, *clusters, cam, fe.pixelFromWorld)) {
           counters.culledBackface += kClusterTriangles;
@@ -422,7 +426,10 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
       continue;
     }
     if ((c0 | c1 | c2) == 0) {
-      for (int k = 0; k < 3; ++k) batchVertex[k][batched] = tri.v[k];
+      for (int k = 0; k < 3; ++k) {
+        batchVertex[k][batched] = tri.v[k];
+        __builtin_prefetch(fe.projected.data() + tri.v[k]);  // (for setupBatch's gathers)
+      }
       batchTriangle[batched] = uint32_t(ti);
       batchFace[batched] = tri.face;
       if (++batched == kBatch) flush();
