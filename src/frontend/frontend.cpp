@@ -385,7 +385,12 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
     Rgba8 colors[kBatch];
     shade.shadeMany(front, fronts, colors);
     for (size_t j = 0; j < fronts; ++j) batchOut[at[j]].color = colors[j];
-    for (size_t i = 0; i < n; ++i) keep(batchOut[i], batchNearest[i]);
+    // (In one piece: per-record push_back was a quarter of this copy's time.)
+    const SetupTriangle* kept = out.triangles.data() + out.triangles.size();
+    if (out.triangles.size() + n + 64 <= out.triangles.capacity())
+      for (size_t b = 0; b < n * sizeof(SetupTriangle); b += 64) __builtin_prefetch(reinterpret_cast<const char*>(kept + 64) + b, 1, 3);
+    out.triangles.insert(out.triangles.end(), batchOut, batchOut + n);
+    if (depth) out.nearest.insert(out.nearest.end(), batchNearest, batchNearest + n);
     out.deferred.insert(out.deferred.end(), batchDeferred, batchDeferred + deferred);
     batched = 0;
   };
