@@ -158,11 +158,35 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     const V subpixel = hn::Set(d, double(kSubpixelOne)), halfUnit = hn::Set(d, 0.5);
     V sx[3], sy[3], X[3], Y[3], num[3], den[3];
     for (int k = 0; k < 3; ++k) {
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+      // 8 lanes (AVX-512): each vertex loaded whole (4 doubles, one 32-byte load) and each group
+      // of 4 transposed, rather than 4 gathers of 8 (sphere frames 0.95-0.97 of the time on Zen 5).
+      static_assert(kSetupBatch == 8);
+      const hn::Half<D> h;
+      using H = hn::Vec<decltype(h)>;
+      H v[8];
+      for (int j = 0; j < 8; ++j) v[j] = hn::LoadU(h, base + offset[k][j]);
+      H field[4][2];  // sx, sy, num, den; lanes 0-3 and 4-7
+      for (int g = 0; g < 2; ++g) {
+        const H* q = v + 4 * g;
+        const H l01 = hn::InterleaveLower(h, q[0], q[1]), u01 = hn::InterleaveUpper(h, q[0], q[1]);  // sx sx n n / sy sy d d
+        const H l23 = hn::InterleaveLower(h, q[2], q[3]), u23 = hn::InterleaveUpper(h, q[2], q[3]);
+        field[0][g] = hn::ConcatLowerLower(h, l23, l01);
+        field[1][g] = hn::ConcatLowerLower(h, u23, u01);
+        field[2][g] = hn::ConcatUpperUpper(h, l23, l01);
+        field[3][g] = hn::ConcatUpperUpper(h, u23, u01);
+      }
+      sx[k] = hn::Combine(d, field[0][1], field[0][0]);
+      sy[k] = hn::Combine(d, field[1][1], field[1][0]);
+      num[k] = hn::Combine(d, field[2][1], field[2][0]);
+      den[k] = hn::Combine(d, field[3][1], field[3][0]);
+#else
       const auto idx = hn::Load(di, offset[k]);
       sx[k] = hn::GatherIndex(d, base + 0, idx);
       sy[k] = hn::GatherIndex(d, base + 1, idx);
       num[k] = hn::GatherIndex(d, base + 2, idx);
       den[k] = hn::GatherIndex(d, base + 3, idx);
+#endif
       X[k] = hn::Floor(hn::Add(hn::Mul(sx[k], subpixel), halfUnit));
       Y[k] = hn::Floor(hn::Add(hn::Mul(sy[k], subpixel), halfUnit));
     }
