@@ -360,7 +360,6 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
   const bool color = has(options.outputs, FrameOutputs::Color);
   constexpr size_t kBatch = 64;
   uint32_t batchVertex[3][kBatch], batchTriangle[kBatch], batchFace[kBatch];
-  SetupTriangle batchOut[kBatch];
   double batchNearest[kBatch];
   DeferredFace batchDeferred[kBatch];
   size_t batched = 0;
@@ -373,24 +372,28 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
   auto flush = [&] {
     const uint32_t* vertex[3] = {batchVertex[0], batchVertex[1], batchVertex[2]};
     size_t deferred = 0;
+    // Set up straight into the chunk's list (room for the whole batch first; resize writes
+    // nothing, UnwrittenAllocator), then cut to the triangles kept.
+    const size_t first = out.triangles.size();
+    out.triangles.resize(first + batched);
+    SetupTriangle* kept = out.triangles.data() + first;
     const size_t n = setupBatch(fe.projected.data(), vertex, batchTriangle, batchFace, batched, cam, options.cull,
-                                counters, batchOut, depth, batchNearest, defer ? batchDeferred : nullptr, &deferred);
+                                counters, kept, depth, batchNearest, defer ? batchDeferred : nullptr, &deferred);
+    out.triangles.resize(first + n);
+    // The next batch's lines, for writing (cold: last written a frame ago).
+    if (first + n + 2 * kBatch <= out.triangles.capacity())
+      for (size_t b = 0; b < kBatch * sizeof(SetupTriangle); b += 64)
+        __builtin_prefetch(reinterpret_cast<const char*>(kept + n) + b, 1, 3);
     // Front faces shaded (see triangleColor), many at once.
     uint32_t front[kBatch], at[kBatch];
     size_t fronts = 0;
     for (size_t i = 0; i < n; ++i) {
-      batchOut[i].color = Rgba8{};
-      if (color && batchOut[i].frontFacing) front[fronts] = batchOut[i].triangle, at[fronts++] = uint32_t(i);
+      kept[i].color = Rgba8{};
+      if (color && kept[i].frontFacing) front[fronts] = kept[i].triangle, at[fronts++] = uint32_t(i);
     }
     Rgba8 colors[kBatch];
     shade.shadeMany(front, fronts, colors);
-    for (size_t j = 0; j < fronts; ++j) batchOut[at[j]].color = colors[j];
-    // In one piece (a push_back per record was a quarter of this copy's time), the next batch's
-    // destination lines prefetched for writing (they are cold: last written a frame ago).
-    const SetupTriangle* kept = out.triangles.data() + out.triangles.size();
-    if (out.triangles.size() + n + 64 <= out.triangles.capacity())
-      for (size_t b = 0; b < n * sizeof(SetupTriangle); b += 64) __builtin_prefetch(reinterpret_cast<const char*>(kept + 64) + b, 1, 3);
-    out.triangles.insert(out.triangles.end(), batchOut, batchOut + n);
+    for (size_t j = 0; j < fronts; ++j) kept[at[j]].color = colors[j];
     if (depth) out.nearest.insert(out.nearest.end(), batchNearest, batchNearest + n);
     out.deferred.insert(out.deferred.end(), batchDeferred, batchDeferred + deferred);
     batched = 0;

@@ -13,6 +13,10 @@
 
 #include <cmath>
 #include <functional>
+#include <memory>
+#include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace hsr {
@@ -144,8 +148,31 @@ struct DeferredCluster {
 inline constexpr int kDeferTile = 64;
 
 /// The set-up triangles of one chunk of scene triangles, in submission order.
+/// An allocator whose default construction writes nothing (for an aggregate, trivially copyable
+/// type: the storage already holds such an object, whose values come later): a list that grows by
+/// resize() and is then written in place, without a pass of zeros first (setupRange).
+template <class T>
+struct UnwrittenAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UnwrittenAllocator<U>;
+  };
+  UnwrittenAllocator() = default;
+  template <class U>
+  UnwrittenAllocator(const UnwrittenAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U*) noexcept {
+    static_assert(std::is_aggregate_v<U> && std::is_trivially_copyable_v<U> && std::is_trivially_destructible_v<U>);
+  }
+  template <class U, class... A>
+  void construct(U* p, A&&... a) {
+    ::new (static_cast<void*>(p)) U(std::forward<A>(a)...);
+  }
+};
+using SetupTriangles = std::vector<SetupTriangle, UnwrittenAllocator<SetupTriangle>>;
+
 struct FrontEndChunk {
-  std::vector<SetupTriangle> triangles;
+  SetupTriangles triangles;
   /// With runFrontEnd's deferBackFaces: the deferred back faces (not in `triangles`), in
   /// submission order (the records of those set up again are the tiled rasterizer's: Bins::late).
   std::vector<DeferredFace> deferred;

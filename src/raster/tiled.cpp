@@ -175,7 +175,7 @@ HWY_INLINE void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, 
 // row). Only triangles whose box can hold a whole tile are looked at. Returns whether any tile
 // got a bound.
 template <DepthStorage S, DepthMapping M>
-bool coverBounds(const std::vector<SetupTriangle>& tris, const DepthSetup& depth, int width, int height, int tilesX,
+bool coverBounds(const SetupTriangles& tris, const DepthSetup& depth, int width, int height, int tilesX,
                  std::vector<double>& cover) {
   constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
   bool any = false;
@@ -263,7 +263,7 @@ void sortPairs(ChunkBins& cb, size_t tiles, NearestOf&& nearestOf) {
 
 void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const DepthSetup* cullFor) {
   ChunkBins& cb = bins.chunks[chunk];
-  const std::vector<SetupTriangle>& tris = triangles.triangles;
+  const SetupTriangles& tris = triangles.triangles;
   if (triangles.nearest.size() != tris.size())
     throw std::logic_error("binChunk: the chunk has no nearest bounds (runFrontEnd without nearestFor)");
   bins.records[2 * chunk] = tris.data();
