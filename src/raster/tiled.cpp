@@ -239,21 +239,38 @@ void prepareBins(Bins& bins, int width, int height, size_t chunkCount) {
 
 namespace {
 
-// Sorts cb.pairs (tile << 32 | localKey) by tile into cb.start/items/itemNearest (a counting
-// sort, stable: each tile's triangles stay in submission order), with each item's nearest bound
-// nearestOf(index in the chunk's records or deferred faces).
-template <class NearestOf>
-void sortPairs(ChunkBins& cb, size_t tiles, NearestOf&& nearestOf) {
+// Sorts cb.pairs (tile << 32 | name: a localKey, or the index of a deferred face or cluster) by
+// tile into cb.start/items/itemNearest (a counting sort, stable: each tile's items stay in
+// submission order), each item itemOf(name) with its nearest bound nearestOf(localIndex(name)).
+template <class ItemOf, class NearestOf>
+void sortPairs(ChunkBins& cb, size_t tiles, ItemOf&& itemOf, NearestOf&& nearestOf) {
   cb.start.assign(tiles + 1, 0);
-  for (uint64_t p : cb.pairs) ++cb.start[(p >> 32) + 1];
+  // Run by run of pairs in one tile (neighbouring triangles mostly share theirs): a counter
+  // incremented pair by pair in memory made each increment wait for the one before.
+  const uint64_t* pairs = cb.pairs.data();
+  const size_t n = cb.pairs.size();
+  auto runEnd = [&](size_t i) {
+    const uint64_t tile = pairs[i] >> 32;
+    size_t j = i + 1;
+    while (j < n && pairs[j] >> 32 == tile) ++j;
+    return j;
+  };
+  for (size_t i = 0, j; i < n; i = j) {
+    j = runEnd(i);
+    cb.start[(pairs[i] >> 32) + 1] += uint32_t(j - i);
+  }
   for (size_t t = 0; t < tiles; ++t) cb.start[t + 1] += cb.start[t];
-  cb.items.resize(cb.pairs.size());
-  cb.itemNearest.resize(cb.pairs.size());
-  for (uint64_t p : cb.pairs) {
-    const uint32_t at = cb.start[p >> 32]++;
-    cb.items[at] = uint32_t(p);
-    // Next to the item: the tile pass reads them in order.
-    cb.itemNearest[at] = nearestOf(localIndex(uint32_t(p)));
+  cb.items.resize(n);
+  cb.itemNearest.resize(n);
+  for (size_t i = 0, j; i < n; i = j) {
+    j = runEnd(i);
+    uint32_t& next = cb.start[pairs[i] >> 32];
+    for (size_t k = i; k < j; ++k) {
+      cb.items[next + (k - i)] = itemOf(uint32_t(pairs[k]));
+      // Next to the item: the tile pass reads them in order.
+      cb.itemNearest[next + (k - i)] = nearestOf(localIndex(uint32_t(pairs[k])));
+    }
+    next += uint32_t(j - i);
   }
   for (size_t t = tiles; t > 0; --t) cb.start[t] = cb.start[t - 1];  // back to the beginnings
   cb.start[0] = 0;
@@ -286,7 +303,8 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
     if (cull) binTriangle<true>(tris[i], local, bins.tilesX, cb.pairs, cb.cover.data(), nearest[i], greater, &cb.culled);
     else binTriangle<false>(tris[i], local, bins.tilesX, cb.pairs);
   }
-  sortPairs(cb, tiles, [&](uint32_t i) { return nearest[i]; });
+  const auto same = [](uint32_t item) { return item; };
+  sortPairs(cb, tiles, same, [&](uint32_t i) { return nearest[i]; });
 
   // The deferred back faces, each in its one tile: a counting sort by tile (stable), straight
   // from the faces.
@@ -298,28 +316,21 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
   const std::vector<DeferredCluster>& clusters = triangles.clusters;
   late.records.reserve(m + clusters.size() * kClusterTriangles);  // (slots for the clusters' triangles)
   bins.records[2 * chunk + 1] = late.records.data();
-  late.pairs.resize(m);  // per face: its tile
-  late.start.assign(tiles + 1, 0);
+  late.pairs.clear();
   for (size_t i = 0; i < m; ++i) {
     const DeferredFace& f = faces[i];
     const uint32_t tile = uint32_t(f.minY / kTileSize) * uint32_t(bins.tilesX) + uint32_t(f.minX / kTileSize);
-    late.pairs[i] = tile;
-    ++late.start[tile + 1];
+    late.pairs.push_back(uint64_t(tile) << 32 | i);
   }
-  for (size_t t = 0; t < tiles; ++t) late.start[t + 1] += late.start[t];
-  late.items.resize(m);
-  late.itemNearest.resize(m);
+  sortPairs(
+      late, tiles, [&](uint32_t i) { return localKey(faces[i].triangle - firstTriangle, true, i); },
+      [&](uint32_t i) { return faces[i].nearest; });
   late.itemBox.resize(m);
-  for (size_t i = 0; i < m; ++i) {
-    const DeferredFace& f = faces[i];
-    const uint32_t at = late.start[late.pairs[i]]++;
-    late.items[at] = localKey(f.triangle - firstTriangle, true, uint32_t(i));
-    late.itemNearest[at] = f.nearest;
+  for (size_t item = 0; item < m; ++item) {
+    const DeferredFace& f = faces[localIndex(late.items[item])];
     const uint32_t x0 = uint32_t(f.minX % kTileSize), y0 = uint32_t(f.minY % kTileSize);
-    late.itemBox[at] = x0 | y0 << 8 | uint32_t(x0 + f.maxX - f.minX) << 16 | uint32_t(y0 + f.maxY - f.minY) << 24;
+    late.itemBox[item] = x0 | y0 << 8 | uint32_t(x0 + f.maxX - f.minX) << 16 | uint32_t(y0 + f.maxY - f.minY) << 24;
   }
-  for (size_t t = tiles; t > 0; --t) late.start[t] = late.start[t - 1];  // back to the beginnings
-  late.start[0] = 0;
 
   // The deferred clusters, in every tile their box overlaps (a counting sort by tile, stable).
   ChunkBins& cl = bins.clusters[chunk];
@@ -340,7 +351,7 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
       for (int tx = d.minX / kTileSize; tx <= d.maxX / kTileSize; ++tx)
         cl.pairs.push_back(uint64_t(ty * bins.tilesX + tx) << 32 | i);
   }
-  sortPairs(cl, tiles, [&](uint32_t i) { return clusters[i].nearest; });
+  sortPairs(cl, tiles, same, [&](uint32_t i) { return clusters[i].nearest; });
   cl.itemBox.resize(cl.items.size());
   for (size_t t = 0; t < tiles && k > 0; ++t) {
     const int tx0 = int(t % size_t(bins.tilesX)) * kTileSize, ty0 = int(t / size_t(bins.tilesX)) * kTileSize;

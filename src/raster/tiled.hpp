@@ -90,7 +90,7 @@ struct ChunkBins {
   std::vector<uint32_t> items;  // localKey of each triangle
   std::vector<double> itemNearest;  // per item: its triangle's nearest bound (FrontEndChunk::nearest)
   std::vector<uint64_t> pairs;  // scratch of binChunk(): tile << 32 | localKey, in submission order
-                                // (Bins::late: each deferred face's tile)
+                                // (Bins::late, clusters: | the face's or cluster's index)
   std::vector<double> cover;    // scratch of binChunk(): per tile, the bound of its covering triangles
   uint64_t culled = 0;          // triangle-tile pairs not binned: behind a triangle covering the tile
   // Bins::chunks only: the tiles that have items of this chunk in any of the three sets (chunks,
