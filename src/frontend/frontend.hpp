@@ -147,7 +147,6 @@ struct DeferredCluster {
 /// rasterizer's tile), so that one worker owns everything done with them.
 inline constexpr int kDeferTile = 64;
 
-/// The set-up triangles of one chunk of scene triangles, in submission order.
 /// An allocator whose default construction writes nothing (for an aggregate, trivially copyable
 /// type: the storage already holds such an object, whose values come later): a list that grows by
 /// resize() and is then written in place, without a pass of zeros first (setupRange).
@@ -171,6 +170,7 @@ struct UnwrittenAllocator : std::allocator<T> {
 };
 using SetupTriangles = std::vector<SetupTriangle, UnwrittenAllocator<SetupTriangle>>;
 
+/// The set-up triangles of one chunk of scene triangles, in submission order.
 struct FrontEndChunk {
   SetupTriangles triangles;
   /// With runFrontEnd's deferBackFaces: the deferred back faces (not in `triangles`), in

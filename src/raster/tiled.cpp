@@ -306,8 +306,7 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
   const auto same = [](uint32_t item) { return item; };
   sortPairs(cb, tiles, same, [&](uint32_t i) { return nearest[i]; });
 
-  // The deferred back faces, each in its one tile: a counting sort by tile (stable), straight
-  // from the faces.
+  // The deferred back faces, each in its one tile: a counting sort by tile (stable).
   ChunkBins& late = bins.late[chunk];
   const std::vector<DeferredFace>& faces = triangles.deferred;
   const size_t m = faces.size();
