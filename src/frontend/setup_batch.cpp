@@ -142,13 +142,12 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
                   size_t* deferredCount) {
   const D d;
   const size_t N = hn::Lanes(d);
-  const hn::Rebind<int64_t, D> di;
   size_t written = 0, deferredWritten = 0;
   if (deferredCount) *deferredCount = 0;
   if (!depth) deferred = nullptr;  // (a deferred face needs its nearest bound)
   for (size_t first = 0; first < count; first += N) {
     const size_t lanes = std::min(N, count - first);
-    // Gather each vertex's fields (ProjectedVertex: sx, sy, num, den; 4 x 8 bytes), and snap
+    // Each vertex's fields (ProjectedVertex: sx, sy, num, den; 4 x 8 bytes), and snap
     // (snapCoordinate: an integer below 2^23, the same in double as in int64).
     HWY_ALIGN int64_t offset[3][kSetupBatch];
     for (int k = 0; k < 3; ++k)
@@ -181,7 +180,7 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
       num[k] = hn::Combine(d, field[2][1], field[2][0]);
       den[k] = hn::Combine(d, field[3][1], field[3][0]);
 #else
-      const auto idx = hn::Load(di, offset[k]);
+      const auto idx = hn::Load(hn::Rebind<int64_t, D>(), offset[k]);
       sx[k] = hn::GatherIndex(d, base + 0, idx);
       sy[k] = hn::GatherIndex(d, base + 1, idx);
       num[k] = hn::GatherIndex(d, base + 2, idx);
