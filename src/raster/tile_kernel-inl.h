@@ -516,13 +516,17 @@ void RasterizeTileT(const TileJob& job) {
         // it: all outside one edge -> empty, all inside all edges -> full.
         const int cx0 = std::max(bx * kBlockSize, rx0), cx1 = std::min(bx * kBlockSize + kBlockSize - 1, rx1);
         const int cy0 = std::max(by * kBlockSize, ry0), cy1 = std::min(by * kBlockSize + kBlockSize - 1, ry1);
+        // (An edge function is linear: its largest and smallest values over the corners are at
+        // the corners its slopes point to and away from — E grows with x when dy < 0, with y
+        // when dx > 0 — so two corners decide, not four.)
+        const int64_t left = centerFixed(x0 + cx0), right = centerFixed(x0 + cx1);
+        const int64_t top = centerFixed(y0 + cy0), bottom = centerFixed(y0 + cy1);
         bool full = true, empty = false;
         for (const Edge& edge : e) {
-          int inside = 0;
-          for (int c = 0; c < 4; ++c)
-            inside += edge.at(centerFixed(x0 + (c & 1 ? cx1 : cx0)), centerFixed(y0 + (c & 2 ? cy1 : cy0))) >= edge.bias;
-          empty |= inside == 0;
-          full &= inside == 4;
+          const int64_t largest = edge.at(edge.dy < 0 ? right : left, edge.dx > 0 ? bottom : top);
+          const int64_t smallest = edge.at(edge.dy < 0 ? left : right, edge.dx > 0 ? top : bottom);
+          empty |= largest < edge.bias;
+          full &= smallest >= edge.bias;
         }
         if (empty) {
           if constexpr (kCountBlocks) ++count.blocksEmpty;
