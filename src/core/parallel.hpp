@@ -16,8 +16,9 @@ inline int resolveThreads(int requested) {
 }
 
 /// Runs task(i) for i in [0, n) on the calling thread plus up to threads - 1 pool workers
-/// (the pool has hardware_concurrency - 1 of them, started once). A call made while another
-/// is running (nested, or from another thread) runs serially on its caller.
+/// (the pool has hardware_concurrency - 1 of them, started once). Each thread takes a block of
+/// consecutive indices first (the caller the first block), then helps with the others'. A call
+/// made while another is running (nested, or from another thread) runs serially on its caller.
 void runParallel(size_t n, int threads, const std::function<void(size_t)>& task);
 
 /// Calls fn(i) for i in [begin, end) on up to `threads` threads.
