@@ -1,9 +1,14 @@
 // The thread pool behind parallelFor (core/parallel.hpp): every index runs exactly once, for any
-// count and thread count (each thread takes its own block of indices first, then the others'),
-// and a call made from inside a task runs on its caller.
+// count and thread count (each thread takes its own run of indices first, then the others'), a
+// call made from inside a task runs on its caller, each thread keeps its part; and WorkQueue's
+// lists.
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
+#include <map>
+#include <mutex>
+#include <set>
 #include <memory>
 #include <thread>
 #include <vector>
@@ -57,6 +62,71 @@ TEST(Parallel, NestedCallRunsOnItsCaller) {
     });
   });
   for (size_t i = 0; i < runs.size(); ++i) EXPECT_EQ(runs[i].load(), 1) << i;
+}
+
+// One thread taking every item through one part: its own list first, in order, then the other
+// parts' lists, each in order.
+TEST(WorkQueue, OwnListFirstThenTheOthers) {
+  WorkQueue q;
+  const uint32_t order[] = {4, 0, 6, 2, 5, 1, 3};
+  const size_t bounds[] = {0, 3, 3, 7};  // part 0: 4 0 6; part 1: none; part 2: 2 5 1 3
+  q.reset(order, 7, bounds, 3);
+  std::vector<size_t> got;
+  for (size_t i; (i = q.next(2)) < 7;) got.push_back(i);
+  EXPECT_EQ(got, (std::vector<size_t>{2, 5, 1, 3, 4, 0, 6}));
+  q.reset(order, 7, bounds, 3);
+  got.clear();
+  for (size_t i; (i = q.next(1)) < 7;) got.push_back(i);
+  EXPECT_EQ(got, (std::vector<size_t>{2, 5, 1, 3, 4, 0, 6}));
+  // Consecutive runs: 10 items in 3 parts are [0, 4), [4, 8), [8, 10).
+  q.reset(10, 3);
+  got.clear();
+  for (size_t i; (i = q.next(1)) < 10;) got.push_back(i);
+  EXPECT_EQ(got, (std::vector<size_t>{4, 5, 6, 7, 8, 9, 0, 1, 2, 3}));
+}
+
+TEST(WorkQueue, TwoThreadsTakeEveryItemOnce) {
+  for (int round = 0; round < 50; ++round) {
+    WorkQueue q;
+    std::vector<uint32_t> order(1000);
+    for (uint32_t i = 0; i < 1000; ++i) order[i] = (i * 7919u) % 1000u;  // a permutation
+    const size_t bounds[] = {0, 100, 1000};
+    q.reset(order.data(), order.size(), bounds, 2);
+    std::vector<std::atomic<int>> runs(1000);
+    auto take = [&](size_t part) {
+      for (size_t i; (i = q.next(part)) < 1000;) runs[i].fetch_add(1);
+    };
+    std::thread other(take, 1);
+    take(0);
+    other.join();
+    for (size_t i = 0; i < runs.size(); ++i) ASSERT_EQ(runs[i].load(), 1) << "round " << round << " item " << i;
+  }
+}
+
+// The caller is part 0 (also outside any job); each worker always has the same part, below the
+// job's thread count.
+TEST(Parallel, PartsAreStablePerThread) {
+  EXPECT_EQ(currentPart(), 0u);
+  const std::thread::id caller = std::this_thread::get_id();
+  std::mutex m;
+  std::map<std::thread::id, std::set<size_t>> partsOf;
+  for (int job = 0; job < 50; ++job)
+    parallelFor(0, 16, 2, [&](size_t) {
+      const size_t part = currentPart();
+      {
+        std::lock_guard lock(m);
+        partsOf[std::this_thread::get_id()].insert(part);
+      }
+      std::this_thread::sleep_for(std::chrono::microseconds(200));  // (long enough for the worker to join)
+    });
+  ASSERT_EQ(partsOf.size(), 2u) << "the worker never took part";
+  for (const auto& [thread, parts] : partsOf) {
+    EXPECT_EQ(parts.size(), 1u);
+    EXPECT_LT(*parts.begin(), 2u);
+    if (thread == caller) EXPECT_EQ(*parts.begin(), 0u);
+    else EXPECT_NE(*parts.begin(), 0u);
+  }
+  EXPECT_EQ(currentPart(), 0u);
 }
 
 }  // namespace

@@ -100,9 +100,10 @@ const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, c
     im.tileCapacity = tiles;
   }
   const int workers = algo::prepareTilePass(im.state, im.threads);
-  std::atomic<size_t> next{0};
+  algo::assignUnits(im.state, workers, tiles, [](size_t tile) { return std::pair(int(tile), 1); });
   parallelFor(0, size_t(workers), workers, [&](size_t worker) {
-    for (size_t tile; (tile = next.fetch_add(1, std::memory_order_relaxed)) < tiles;)
+    const size_t part = currentPart();  // (tiles whose records this thread set up come first)
+    for (size_t tile; (tile = im.state.tileWork.next(part)) < tiles;)
       tiled::rasterizeTile(bins, int(tile), im.depth, false, im.tiles[tile], im.state.orders[worker],
                            im.state.counters[tile]);
   });

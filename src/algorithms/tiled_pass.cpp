@@ -39,7 +39,11 @@ void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt
                  TiledState& state) {
   tiled::prepareBins(state.bins, cam.width, cam.height, (scene.triangles.size() + kChunkTriangles - 1) / kChunkTriangles);
   runFrontEnd(
-      scene, cam, opt, state.fe, [&](size_t chunk) { tiled::binChunk(state.bins, chunk, state.fe.chunks[chunk], &depth); },
+      scene, cam, opt, state.fe,
+      [&](size_t chunk) {
+        state.bins.chunks[chunk].producer = uint32_t(currentPart());  // (for assignUnits)
+        tiled::binChunk(state.bins, chunk, state.fe.chunks[chunk], &depth);
+      },
       &depth, deferBackFaces(opt), deferClusters());
   state.bins.projected = state.fe.projected.data();  // (for setting deferred triangles up)
   state.bins.camera = &cam;

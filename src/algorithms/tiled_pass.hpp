@@ -5,8 +5,10 @@
 #include <hsr/frame.hpp>
 #include <hsr/render.hpp>
 
+#include <algorithm>
 #include <vector>
 
+#include "core/parallel.hpp"
 #include "frontend/frontend.hpp"
 #include "raster/tiled.hpp"
 
@@ -22,6 +24,9 @@ struct TiledState {
   std::vector<tiled::TileOrder> orders;         // per worker
   std::vector<tiled::RasterCounters> counters;  // per tile
   std::vector<uint64_t> covered;                // per tile
+  WorkQueue tileWork;                           // the tile pass's units, per worker (assignUnits)
+  std::vector<uint32_t> unitOwner, unitOrder;   // scratch of assignUnits
+  std::vector<size_t> unitBounds, recordsByPart;
   uint64_t memoryBytes() const;
 };
 
@@ -43,9 +48,50 @@ void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt
 /// small triangles), with one visit list each, and the per-tile counters cleared.
 int prepareTilePass(TiledState& state, int threads);
 
+/// Hands the tile pass's `units` to its `workers` (state.tileWork, parts [0, workers)): unit u is
+/// the tiles [tilesOf(u).first, + tilesOf(u).second) of one tile row; each goes first to the
+/// worker whose part set up most of the records binned there (ChunkBins::producer: they are in
+/// its core's caches), then to whoever is free. (Any assignment gives the same image.)
+template <class TilesOf>
+void assignUnits(TiledState& state, int workers, size_t units, TilesOf&& tilesOf);
+
 /// The statistics every tiled pass reports (CONVENTIONS.md keys): the front end's counts and the
 /// tile pass's tests, writes and triangle-tile pairs culled (with `bins`: also those culled when binned). covered_pixels, colour writes,
 /// memory and times are the caller's.
 void tiledStats(Stats& st, const FrontEndOutput& fe, const tiled::Bins* bins, const tiled::RasterCounters& counters);
+
+template <class TilesOf>
+void assignUnits(TiledState& state, int workers, size_t units, TilesOf&& tilesOf) {
+  const size_t parts = size_t(workers);
+  const tiled::Bins& bins = state.bins;
+  // Per tile and part, how many of the records binned there that part set up.
+  std::vector<size_t>& records = state.recordsByPart;
+  records.assign(size_t(bins.tileCount()) * parts, 0);
+  for (size_t c = 0; c < bins.chunkCount; ++c) {
+    const tiled::ChunkBins& cb = bins.chunks[c];
+    const size_t part = std::min<size_t>(cb.producer, parts - 1);
+    for (uint32_t t : cb.touched) records[t * parts + part] += cb.start[t + 1] - cb.start[t];
+  }
+  // Each unit's owner: the part with the most records over its tiles (none: consecutive runs).
+  state.unitOwner.resize(units);
+  state.unitBounds.assign(parts + 1, 0);
+  for (size_t u = 0; u < units; ++u) {
+    const auto [first, count] = tilesOf(u);
+    size_t owner = u * parts / units, most = 0;
+    for (size_t p = 0; p < parts; ++p) {
+      size_t n = 0;
+      for (int t = first; t < first + count; ++t) n += records[size_t(t) * parts + p];
+      if (n > most) owner = p, most = n;
+    }
+    state.unitOwner[u] = uint32_t(owner);
+    ++state.unitBounds[owner + 1];
+  }
+  // The units part by part, in order within each (a counting sort).
+  for (size_t p = 0; p < parts; ++p) state.unitBounds[p + 1] += state.unitBounds[p];
+  state.unitOrder.resize(units);
+  records.assign(state.unitBounds.begin(), state.unitBounds.end() - 1);  // (now each part's next place)
+  for (size_t u = 0; u < units; ++u) state.unitOrder[records[state.unitOwner[u]]++] = uint32_t(u);
+  state.tileWork.reset(state.unitOrder.data(), units, state.unitBounds.data(), parts);
+}
 
 }  // namespace hsr::algo

@@ -1,6 +1,6 @@
 // The persistent thread pool behind parallelFor (see parallel.hpp). Workers sleep on a
-// condition variable between jobs; a job hands out its indices in one block per thread
-// (BlockedIndices).
+// condition variable between jobs; worker w always takes part w + 1 of a job (WorkQueue), and
+// only when the job has that many parts.
 #include "core/parallel.hpp"
 
 #include <algorithm>
@@ -13,55 +13,13 @@
 namespace hsr {
 namespace {
 
-// Indices [0, n) shared out among `parts` threads in blocks of consecutive indices, one block
-// per part: a thread takes the indices of its own block first, in order, then helps with the
-// others' (next). The pool's threads keep their parts from job to job (the caller is part 0,
-// the workers 1, 2, ... in the order they join), so a thread mostly reads what it wrote itself
-// in the job before for nearby indices, from its own core's caches: the front end's triangle
-// chunks read the projected vertices of the same part of the mesh that its vertex chunks wrote
-// (sphere frames 0.96 of the time with two threads, against one shared counter; the tile pass
-// handing each worker its own half of the image gained nothing more, and keeps its counter).
-class BlockedIndices {
- public:
-  // Starts handing out [0, n) to `parts` (>= 1) threads; not while any thread calls next().
-  void reset(size_t n, size_t parts) {
-    if (parts > capacity_) {
-      blocks_.reset(new Block[parts]);
-      capacity_ = parts;
-    }
-    parts_ = parts;
-    n_ = n;
-    const size_t size = (n + parts - 1) / parts;
-    for (size_t b = 0; b < parts; ++b) {
-      blocks_[b].next.store(std::min(n, b * size), std::memory_order_relaxed);
-      blocks_[b].end = std::min(n, (b + 1) * size);
-    }
-  }
-  // The next index for thread `part` (< parts), or n when every index is taken.
-  size_t next(size_t part) {
-    for (size_t k = 0; k < parts_; ++k) {
-      Block& b = blocks_[part + k < parts_ ? part + k : part + k - parts_];
-      if (b.next.load(std::memory_order_relaxed) >= b.end) continue;  // (taken: no write to a line others read)
-      const size_t i = b.next.fetch_add(1, std::memory_order_relaxed);
-      if (i < b.end) return i;
-    }
-    return n_;
-  }
-
- private:
-  struct alignas(64) Block {  // a cache line each: the threads' counters never share one
-    std::atomic<size_t> next{0};
-    size_t end = 0;
-  };
-  std::unique_ptr<Block[]> blocks_;
-  size_t capacity_ = 0, parts_ = 0, n_ = 0;
-};
+thread_local size_t tPart = 0;  // currentPart(): set once by each pool worker
 
 class ThreadPool {
  public:
   ThreadPool() {
     const int workers = std::max(1, resolveThreads(0) - 1);
-    for (int i = 0; i < workers; ++i) threads_.emplace_back([this] { work(); });
+    for (int i = 0; i < workers; ++i) threads_.emplace_back([this, i] { work(size_t(i)); });
   }
   ~ThreadPool() {
     {
@@ -82,34 +40,33 @@ class ThreadPool {
       std::lock_guard lock(m_);
       task_ = &task;
       admit_ = int(std::min<size_t>({size_t(threads - 1), threads_.size(), n - 1}));
-      indices_.reset(n, size_t(admit_) + 1);
+      queue_.reset(n, size_t(admit_) + 1);
       end_ = n;
-      joined_ = 0;
       ++generation_;
     }
     wake_.notify_all();
     drain(0);
     std::unique_lock lock(m_);
-    admit_ = joined_;  // no worker may join after this: task_ is about to go out of scope
+    admit_ = 0;  // no worker may join after this: task_ is about to go out of scope
     done_.wait(lock, [&] { return active_ == 0; });
     task_ = nullptr;
   }
 
  private:
   void drain(size_t part) {
-    for (size_t i; (i = indices_.next(part)) < end_;) (*task_)(i);
+    for (size_t i; (i = queue_.next(part)) < end_;) (*task_)(i);
   }
-  void work() {
+  void work(size_t index) {
+    tPart = index + 1;
     uint64_t seen = 0;
     std::unique_lock lock(m_);
     for (;;) {
-      wake_.wait(lock, [&] { return stop_ || (generation_ != seen && joined_ < admit_); });
+      wake_.wait(lock, [&] { return stop_ || (generation_ != seen && index < size_t(admit_)); });
       if (stop_) return;
       seen = generation_;
-      const size_t part = size_t(++joined_);
       ++active_;
       lock.unlock();
-      drain(part);
+      drain(tPart);
       lock.lock();
       if (--active_ == 0) done_.notify_all();
     }
@@ -120,14 +77,46 @@ class ThreadPool {
   std::mutex m_;
   std::condition_variable wake_, done_;
   const std::function<void(size_t)>* task_ = nullptr;
-  BlockedIndices indices_;
+  WorkQueue queue_;
   size_t end_ = 0;
-  int admit_ = 0, joined_ = 0, active_ = 0;
+  int admit_ = 0;  // workers [0, admit_) take part in the current job
+  int active_ = 0;
   uint64_t generation_ = 0;
   bool stop_ = false;
 };
 
 }  // namespace
+
+void WorkQueue::setParts(size_t parts) {
+  if (parts > capacity_) {
+    lists_.reset(new List[parts]);
+    capacity_ = parts;
+  }
+  parts_ = parts;
+}
+
+void WorkQueue::reset(size_t n, size_t parts) {
+  setParts(parts);
+  order_.clear();
+  n_ = n;
+  const size_t size = (n + parts - 1) / parts;
+  for (size_t p = 0; p < parts; ++p) {
+    lists_[p].next.store(std::min(n, p * size), std::memory_order_relaxed);
+    lists_[p].end = std::min(n, (p + 1) * size);
+  }
+}
+
+void WorkQueue::reset(const uint32_t* order, size_t n, const size_t* bounds, size_t parts) {
+  setParts(parts);
+  order_.assign(order, order + n);
+  n_ = n;
+  for (size_t p = 0; p < parts; ++p) {
+    lists_[p].next.store(bounds[p], std::memory_order_relaxed);
+    lists_[p].end = bounds[p + 1];
+  }
+}
+
+size_t currentPart() { return tPart; }
 
 void runParallel(size_t n, int threads, const std::function<void(size_t)>& task) {
   static ThreadPool pool;

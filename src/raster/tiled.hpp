@@ -93,6 +93,9 @@ struct ChunkBins {
                                 // (Bins::late, clusters: | the face's or cluster's index)
   std::vector<double> cover;    // scratch of binChunk(): per tile, the bound of its covering triangles
   uint64_t culled = 0;          // triangle-tile pairs not binned: behind a triangle covering the tile
+  // Bins::chunks only: the part of the parallel job (core/parallel.hpp) whose thread set the chunk
+  // up and binned it, its records are in that core's caches (set by the caller of binChunk).
+  uint32_t producer = 0;
   // Bins::chunks only: the tiles that have items of this chunk in any of the three sets (chunks,
   // late, clusters), in order (binChunk), for countEntries' per-tile chunk lists.
   std::vector<uint32_t> touched;
