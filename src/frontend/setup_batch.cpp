@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 
 #include "core/depth_map.hpp"
@@ -306,16 +307,18 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     const V nearestV = depth ? NearestStored(*depth, {na, nb, nc}, {da, db, dc}, px, py) : zero;
     HWY_ALIGN double lane[19][kSetupBatch];
     // (One store per field: a braced list of the vectors would be copied whole first.)
+    hn::Store(bx0, d, lane[6]), hn::Store(bx1, d, lane[7]), hn::Store(by0, d, lane[8]), hn::Store(by1, d, lane[9]);
+    hn::Store(nearestV, d, lane[16]);
+#if !(HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3)  // (the AVX-512 records are built from the vectors)
     for (int k = 0; k < 3; ++k) {
       hn::Store(X[k], d, lane[k]);
       hn::Store(Y[k], d, lane[3 + k]);
     }
-    hn::Store(bx0, d, lane[6]), hn::Store(bx1, d, lane[7]), hn::Store(by0, d, lane[8]), hn::Store(by1, d, lane[9]);
     hn::Store(na, d, lane[10]), hn::Store(nb, d, lane[11]), hn::Store(nc, d, lane[12]);
     hn::Store(da, d, lane[13]), hn::Store(db, d, lane[14]), hn::Store(dc, d, lane[15]);
-    hn::Store(nearestV, d, lane[16]);
     hn::Store(hn::VecFromMask(d, front), d, lane[17]);
     hn::Store(coverage, d, lane[18]);
+#endif
     // Deferred: back faces whose box lies in one kDeferTile square.
     M defer = hn::FirstN(d, 0);
     if (deferred) {
@@ -338,6 +341,78 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
       f.nearest = lane[16][j];
     }
     hn::StoreMaskBits(d, hn::AndNot(defer, survivors), survivorBits);
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+    // 8 lanes (AVX-512): each record's 12 eight-byte words built a vector per word (lane j:
+    // triangle j's), the vectors transposed, and each survivor's record stored with two stores
+    // (instead of 24 fields read from the lane arrays and written one by one per record).
+    {
+      const hn::Repartition<int64_t, D> di;
+      const hn::Repartition<uint64_t, D> du;
+      const hn::Rebind<uint32_t, D> du32;
+      auto toInt = [&](V v) { return hn::BitCast(du, hn::ConvertTo(di, v)); };
+      auto low32 = [&](V v) { return hn::And(toInt(v), hn::Set(du, 0xFFFFFFFFull)); };
+      auto low16 = [&](V v) { return hn::And(toInt(v), hn::Set(du, 0xFFFFull)); };
+      const auto q0 = hn::Or(low32(X[0]), hn::ShiftLeft<32>(toInt(X[1])));
+      const auto q1 = hn::Or(low32(X[2]), hn::ShiftLeft<32>(toInt(Y[0])));
+      const auto q2 = hn::Or(low32(Y[1]), hn::ShiftLeft<32>(toInt(Y[2])));
+      const auto q3 = hn::Or(hn::Or(low16(bx0), hn::ShiftLeft<16>(low16(by0))),
+                             hn::Or(hn::ShiftLeft<32>(low16(bx1)), hn::ShiftLeft<48>(toInt(by1))));
+      HWY_ALIGN uint32_t tri8[kSetupBatch], face8[kSetupBatch];  // (the lists end with the batch)
+      hn::Vec<decltype(du32)> tris, faces;
+      if (lanes == N) {
+        tris = hn::LoadU(du32, triIndex + first), faces = hn::LoadU(du32, face + first);
+      } else {
+        for (size_t j = 0; j < N; ++j) tri8[j] = triIndex[first + std::min(j, lanes - 1)], face8[j] = face[first + std::min(j, lanes - 1)];
+        tris = hn::Load(du32, tri8), faces = hn::Load(du32, face8);
+      }
+      const auto ids = hn::Or(hn::PromoteTo(du, tris), hn::ShiftLeft<32>(hn::PromoteTo(du, faces)));
+      // frontFacing (byte 88: 1 or 0), a zero byte, coverage (bytes 90-91), colour (92-95: set by the caller)
+      const auto flags = hn::Or(hn::IfThenElseZero(hn::RebindMask(du, front), hn::Set(du, 1)),
+                                hn::ShiftLeft<16>(toInt(coverage)));
+      static_assert(offsetof(SetupTriangle, minX) == 24 && offsetof(SetupTriangle, depthNum) == 32 &&
+                    offsetof(SetupTriangle, depthDen) == 56 && offsetof(SetupTriangle, triangle) == 80 &&
+                    offsetof(SetupTriangle, face) == 84 && offsetof(SetupTriangle, frontFacing) == 88 &&
+                    offsetof(SetupTriangle, coverage) == 90 && offsetof(SetupTriangle, color) == 92,
+                    "the words below are the record's layout");
+      __m512i r[8] = {q0.raw, q1.raw, q2.raw, q3.raw, hn::BitCast(du, na).raw, hn::BitCast(du, nb).raw,
+                      hn::BitCast(du, nc).raw, hn::BitCast(du, da).raw};
+      // 8x8 transpose of 64-bit words: r[j] becomes words 0-7 of triangle j's record.
+      __m512i t[8];
+      for (int i = 0; i < 8; i += 2) {
+        t[i] = _mm512_unpacklo_epi64(r[i], r[i + 1]);
+        t[i + 1] = _mm512_unpackhi_epi64(r[i], r[i + 1]);
+      }
+      for (int i = 0; i < 8; i += 4)
+        for (int k = 0; k < 2; ++k) {
+          r[i + k] = _mm512_shuffle_i64x2(t[i + k], t[i + k + 2], 0x88);
+          r[i + k + 2] = _mm512_shuffle_i64x2(t[i + k], t[i + k + 2], 0xDD);
+        }
+      __m512i row[8];
+      for (int k = 0; k < 4; ++k) {
+        row[k] = _mm512_shuffle_i64x2(r[k], r[k + 4], 0x88);
+        row[k + 4] = _mm512_shuffle_i64x2(r[k], r[k + 4], 0xDD);
+      }
+      // Words 8-11 (db, dc, ids, flags): a 4x8 transpose into halves.
+      const __m512i w8 = hn::BitCast(du, db).raw, w9 = hn::BitCast(du, dc).raw;
+      const __m512i a0 = _mm512_unpacklo_epi64(w8, w9), a1 = _mm512_unpackhi_epi64(w8, w9);
+      const __m512i b0 = _mm512_unpacklo_epi64(ids.raw, flags.raw), b1 = _mm512_unpackhi_epi64(ids.raw, flags.raw);
+      const __m512i lo = _mm512_setr_epi64(0, 1, 8, 9, 2, 3, 10, 11), hi = _mm512_setr_epi64(4, 5, 12, 13, 6, 7, 14, 15);
+      __m256i tail[8];
+      const __m512i even02 = _mm512_permutex2var_epi64(a0, lo, b0), even46 = _mm512_permutex2var_epi64(a0, hi, b0);
+      const __m512i odd13 = _mm512_permutex2var_epi64(a1, lo, b1), odd57 = _mm512_permutex2var_epi64(a1, hi, b1);
+      tail[0] = _mm512_castsi512_si256(even02), tail[2] = _mm512_extracti64x4_epi64(even02, 1);
+      tail[4] = _mm512_castsi512_si256(even46), tail[6] = _mm512_extracti64x4_epi64(even46, 1);
+      tail[1] = _mm512_castsi512_si256(odd13), tail[3] = _mm512_extracti64x4_epi64(odd13, 1);
+      tail[5] = _mm512_castsi512_si256(odd57), tail[7] = _mm512_extracti64x4_epi64(odd57, 1);
+      for (unsigned bits = survivorBits[0]; bits; bits &= bits - 1) {
+        const size_t j = hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
+        if (depth) nearest[written] = lane[16][j];
+        char* at = reinterpret_cast<char*>(out + written++);
+        _mm512_storeu_si512(at, row[j]);
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(at + 64), tail[j]);
+      }
+    }
+#else
     for (unsigned bits = survivorBits[0]; bits; bits &= bits - 1) {
       const size_t j = hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
       if (depth) nearest[written] = lane[16][j];
@@ -357,6 +432,7 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
       t.frontFacing = lane[17][j] != 0;
       t.coverage = uint16_t(lane[18][j]);
     }
+#endif
   }
   if (deferredCount) *deferredCount = deferredWritten;
   return written;
