@@ -422,6 +422,13 @@ void setUpCluster(const Bins& bins, size_t c, size_t k, const DepthSetup& depth,
     while (state.load(std::memory_order_acquire) != 2) std::this_thread::yield();
     return;
   }
+  const RecordRoom& records = bins.late[c].records;
+  const uint32_t slot = cl.clusterSlot(k);
+  // The slots' lines, for writing (cold: last written a frame ago, maybe by the other core),
+  // while the cluster's triangles are read and set up.
+  SetupTriangle* out = records.room(slot);
+  for (size_t b = 0; b < kClusterTriangles * sizeof(SetupTriangle); b += 64)
+    __builtin_prefetch(reinterpret_cast<const char*>(out) + b, 1, 3);
   uint32_t vertex[3][kClusterTriangles], tri[kClusterTriangles], face[kClusterTriangles];
   const uint32_t first = cl.clusterList[k].cluster * uint32_t(kClusterTriangles);
   for (uint32_t i = 0; i < kClusterTriangles; ++i) {
@@ -430,19 +437,12 @@ void setUpCluster(const Bins& bins, size_t c, size_t k, const DepthSetup& depth,
     tri[i] = first + i;
     face[i] = t.face;
   }
-  SetupTriangle out[kClusterTriangles];
-  double nearest[kClusterTriangles];
   FrontEndCounters ignored;
   const uint32_t* v[3] = {vertex[0], vertex[1], vertex[2]};
+  // Set up straight into the slots (the survivors in order, from `slot` on).
   const size_t n = setupBatch(bins.projected, v, tri, face, kClusterTriangles, *bins.camera, Cull::None, ignored, out,
-                              &depth, nearest);
-  const RecordRoom& records = bins.late[c].records;
-  const uint32_t slot = cl.clusterSlot(k);
-  for (size_t i = 0; i < n; ++i) {
-    out[i].frontFacing = false;
-    records.set(slot + i, out[i]);
-    cl.slotNearest[slot + i] = nearest[i];
-  }
+                              &depth, cl.slotNearest.data() + slot);
+  for (size_t i = 0; i < n; ++i) out[i].frontFacing = false, out[i].color = Rgba8{};
   cl.survivors[k] = uint8_t(n);
   counters.setUpLate += n;
   state.store(2, std::memory_order_release);

@@ -75,6 +75,11 @@ class RecordRoom {
   size_t capacity() const { return capacity_; }
   /// Writes record i (starts its lifetime); i < capacity().
   void set(size_t i, const SetupTriangle& t) const { new (bytes_.get() + i * sizeof(SetupTriangle)) SetupTriangle(t); }
+  /// Records [i, ...) to be written in place, as setupBatch writes its output (an aggregate of
+  /// plain values: writing every field makes the record); i < capacity().
+  SetupTriangle* room(size_t i) const {
+    return std::launder(reinterpret_cast<SetupTriangle*>(bytes_.get() + i * sizeof(SetupTriangle)));
+  }
   /// The records, of which those set() may be read.
   const SetupTriangle* data() const { return std::launder(reinterpret_cast<const SetupTriangle*>(bytes_.get())); }
 
