@@ -3,9 +3,11 @@
 // inside an algorithm's inner loop. Work items are fixed by the caller, so results never depend
 // on the thread count as long as each index writes only its own outputs.
 #pragma once
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <thread>
 #include <vector>
 

@@ -80,7 +80,7 @@ class RecordRoom {
   SetupTriangle* room(size_t i) const {
     return std::launder(reinterpret_cast<SetupTriangle*>(bytes_.get() + i * sizeof(SetupTriangle)));
   }
-  /// The records, of which those set() may be read.
+  /// The records, of which those set() or written through room() may be read.
   const SetupTriangle* data() const { return std::launder(reinterpret_cast<const SetupTriangle*>(bytes_.get())); }
 
  private:
@@ -99,7 +99,7 @@ struct ChunkBins {
   std::vector<double> cover;    // scratch of binChunk(): per tile, the bound of its covering triangles
   uint64_t culled = 0;          // triangle-tile pairs not binned: behind a triangle covering the tile
   // Bins::chunks only: the part of the parallel job (core/parallel.hpp) whose thread set the chunk
-  // up and binned it, its records are in that core's caches (set by the caller of binChunk).
+  // up and binned it (its records are in that core's caches; set by the caller of binChunk).
   uint32_t producer = 0;
   // Bins::chunks only: the tiles that have items of this chunk in any of the three sets (chunks,
   // late, clusters), in order (binChunk), for countEntries' per-tile chunk lists.
