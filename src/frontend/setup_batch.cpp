@@ -362,7 +362,10 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
       if (lanes == N) {
         tris = hn::LoadU(du32, triIndex + first), faces = hn::LoadU(du32, face + first);
       } else {
-        for (size_t j = 0; j < N; ++j) tri8[j] = triIndex[first + std::min(j, lanes - 1)], face8[j] = face[first + std::min(j, lanes - 1)];
+        for (size_t j = 0; j < N; ++j) {
+          tri8[j] = triIndex[first + std::min(j, lanes - 1)];
+          face8[j] = face[first + std::min(j, lanes - 1)];
+        }
         tris = hn::Load(du32, tri8), faces = hn::Load(du32, face8);
       }
       const auto ids = hn::Or(hn::PromoteTo(du, tris), hn::ShiftLeft<32>(hn::PromoteTo(du, faces)));
