@@ -41,7 +41,6 @@ class ThreadPool {
       task_ = &task;
       admit_ = int(std::min<size_t>({size_t(threads - 1), threads_.size(), n - 1}));
       queue_.reset(n, size_t(admit_) + 1);
-      end_ = n;
       ++generation_;
     }
     wake_.notify_all();
@@ -54,7 +53,7 @@ class ThreadPool {
 
  private:
   void drain(size_t part) {
-    for (size_t i; (i = queue_.next(part)) < end_;) (*task_)(i);
+    for (size_t i; (i = queue_.next(part)) < queue_.size();) (*task_)(i);
   }
   void work(size_t index) {
     tPart = index + 1;
@@ -78,7 +77,6 @@ class ThreadPool {
   std::condition_variable wake_, done_;
   const std::function<void(size_t)>* task_ = nullptr;
   WorkQueue queue_;
-  size_t end_ = 0;
   int admit_ = 0;  // workers [0, admit_) take part in the current job
   int active_ = 0;
   uint64_t generation_ = 0;

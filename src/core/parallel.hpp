@@ -32,6 +32,8 @@ class WorkQueue {
   void reset(size_t n, size_t parts);
   /// The items order[0, n) (a permutation of [0, n)), part p's list order[bounds[p], bounds[p + 1]).
   void reset(const uint32_t* order, size_t n, const size_t* bounds, size_t parts);
+  /// n: the items are [0, n).
+  size_t size() const { return n_; }
   /// The next item for thread `part` (< parts), or n when every item is taken. Not while reset() runs.
   size_t next(size_t part) {
     for (size_t k = 0; k < parts_; ++k) {

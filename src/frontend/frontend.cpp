@@ -381,9 +381,7 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
                                 counters, kept, depth, batchNearest, defer ? batchDeferred : nullptr, &deferred);
     out.triangles.resize(first + n);
     // The next batch's lines, for writing (cold: last written a frame ago).
-    if (first + n + 2 * kBatch <= out.triangles.capacity())
-      for (size_t b = 0; b < kBatch * sizeof(SetupTriangle); b += 64)
-        __builtin_prefetch(reinterpret_cast<const char*>(kept + n) + b, 1, 3);
+    if (first + n + 2 * kBatch <= out.triangles.capacity()) prefetchForWriting(kept + n, kBatch);
     // Front faces shaded (see triangleColor), many at once.
     uint32_t front[kBatch], at[kBatch];
     size_t fronts = 0;

@@ -170,6 +170,13 @@ struct UnwrittenAllocator : std::allocator<T> {
 };
 using SetupTriangles = std::vector<SetupTriangle, UnwrittenAllocator<SetupTriangle>>;
 
+/// Fetches the cache lines of records [first, first + count) for writing: records written in
+/// place (setupBatch's output) land on lines last written a frame ago, maybe by the other core.
+inline void prefetchForWriting(const SetupTriangle* first, size_t count) {
+  for (size_t b = 0; b < count * sizeof(SetupTriangle); b += 64)
+    __builtin_prefetch(reinterpret_cast<const char*>(first) + b, 1, 3);
+}
+
 /// The set-up triangles of one chunk of scene triangles, in submission order.
 struct FrontEndChunk {
   SetupTriangles triangles;

@@ -424,11 +424,8 @@ void setUpCluster(const Bins& bins, size_t c, size_t k, const DepthSetup& depth,
   }
   const RecordRoom& records = bins.late[c].records;
   const uint32_t slot = cl.clusterSlot(k);
-  // The slots' lines, for writing (cold: last written a frame ago, maybe by the other core),
-  // while the cluster's triangles are read and set up.
   SetupTriangle* out = records.room(slot);
-  for (size_t b = 0; b < kClusterTriangles * sizeof(SetupTriangle); b += 64)
-    __builtin_prefetch(reinterpret_cast<const char*>(out) + b, 1, 3);
+  prefetchForWriting(out, kClusterTriangles);  // (while the cluster's triangles are read and set up)
   uint32_t vertex[3][kClusterTriangles], tri[kClusterTriangles], face[kClusterTriangles];
   const uint32_t first = cl.clusterList[k].cluster * uint32_t(kClusterTriangles);
   for (uint32_t i = 0; i < kClusterTriangles; ++i) {
