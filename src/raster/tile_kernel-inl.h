@@ -505,33 +505,56 @@ void RasterizeTileT(const TileJob& job) {
     // The planes' evaluation errors over the tile, for the bounds of its blocks.
     const double pErr = planeError(m.p, x0 + w, y0 + h), qErr = planeError(m.q, x0 + w, y0 + h);
 
-    for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by)
-      for (int bx = rx0 / kBlockSize; bx <= rx1 / kBlockSize; ++bx) {
-        const int b = by * kBlocksX + bx;
-        if (Beaten<M, kIds>(qNear, s.blockFar[b])) {
-          if constexpr (kCountBlocks) ++count.blocksCulled;
-          continue;
-        }
-        // The block's part of the box. Its four corner centres bound every edge function on
-        // it: all outside one edge -> empty, all inside all edges -> full.
-        const int cx0 = std::max(bx * kBlockSize, rx0), cx1 = std::min(bx * kBlockSize + kBlockSize - 1, rx1);
-        const int cy0 = std::max(by * kBlockSize, ry0), cy1 = std::min(by * kBlockSize + kBlockSize - 1, ry1);
-        // (An edge function is linear: its largest and smallest values over the corners are at
-        // the corners its slopes point to and away from — E grows with x when dy < 0, with y
-        // when dx > 0 — so two corners decide, not four.)
-        const int64_t left = centerFixed(x0 + cx0), right = centerFixed(x0 + cx1);
-        const int64_t top = centerFixed(y0 + cy0), bottom = centerFixed(y0 + cy1);
-        bool full = true, empty = false;
+    const int bxFirst = rx0 / kBlockSize, bxLast = rx1 / kBlockSize;
+    for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by) {
+      // The row's blocks classified a vector of blocks at a time (lane: block column): skipped
+      // when behind everything stored there, or outside an edge; in the triangle when inside
+      // all three. Each block's part of the box has four corner centres that bound every edge
+      // function on it, and an edge function is linear: its largest and smallest values are at
+      // the corners its slopes point to and away from (E grows with x when dy < 0, with y when
+      // dx > 0), so two corners decide. Computed in double, exactly: E = dx (py - ay) - dy (px -
+      // ax) with snapped coordinates below 2^23 in magnitude is below 2^49.
+      const int cy0 = std::max(by * kBlockSize, ry0), cy1 = std::min(by * kBlockSize + kBlockSize - 1, ry1);
+      const int64_t top = centerFixed(y0 + cy0), bottom = centerFixed(y0 + cy1);
+      uint64_t visit = 0, inside = 0;  // bit bx: the block is drawn; the triangle covers its part of the box
+      for (size_t k = 0; k < size_t(kBlocksX); k += N) {
+        const V column = hn::Add(lane, hn::Set(d, double(k)));
+        const Mask inBox = hn::And(hn::Ge(column, hn::Set(d, double(bxFirst))), hn::Le(column, hn::Set(d, double(bxLast))));
+        if (hn::AllFalse(d, inBox)) continue;
+        const V far = hn::Load(d, s.blockFar + size_t(by * kBlocksX) + k);
+        const Mask beaten = kIds ? Nearer<kGreater>(far, qNearV) : hn::Not(Nearer<kGreater>(qNearV, far));
+        const V firstColumn = hn::Mul(column, hn::Set(d, double(kBlockSize)));
+        const V leftCol = hn::Max(firstColumn, hn::Set(d, double(rx0)));
+        const V rightCol = hn::Min(hn::Add(firstColumn, hn::Set(d, double(kBlockSize - 1))), hn::Set(d, double(rx1)));
+        const V one = hn::Set(d, double(kSubpixelOne)), half = hn::Set(d, double(kSubpixelOne / 2));
+        const V origin = hn::Set(d, double(x0));
+        const V left = hn::Add(hn::Mul(hn::Add(leftCol, origin), one), half);  // centerFixed, exact
+        const V right = hn::Add(hn::Mul(hn::Add(rightCol, origin), one), half);
+        Mask empty = hn::FirstN(d, 0), full = hn::FirstN(d, N);
         for (const Edge& edge : e) {
-          const int64_t largest = edge.at(edge.dy < 0 ? right : left, edge.dx > 0 ? bottom : top);
-          const int64_t smallest = edge.at(edge.dy < 0 ? left : right, edge.dx > 0 ? top : bottom);
-          empty |= largest < edge.bias;
-          full &= smallest >= edge.bias;
+          const V dy = hn::Set(d, double(edge.dy)), ax = hn::Set(d, double(edge.ax)), bias = hn::Set(d, double(edge.bias));
+          const V yLargest = hn::Set(d, double(edge.dx * ((edge.dx > 0 ? bottom : top) - edge.ay)));
+          const V ySmallest = hn::Set(d, double(edge.dx * ((edge.dx > 0 ? top : bottom) - edge.ay)));
+          const V largest = hn::Sub(yLargest, hn::Mul(dy, hn::Sub(edge.dy < 0 ? right : left, ax)));
+          const V smallest = hn::Sub(ySmallest, hn::Mul(dy, hn::Sub(edge.dy < 0 ? left : right, ax)));
+          empty = hn::Or(empty, hn::Lt(largest, bias));
+          full = hn::And(full, hn::Ge(smallest, bias));
         }
-        if (empty) {
-          if constexpr (kCountBlocks) ++count.blocksEmpty;
-          continue;
+        uint8_t bits[2][8] = {};
+        hn::StoreMaskBits(d, hn::AndNot(beaten, hn::AndNot(empty, inBox)), bits[0]);
+        hn::StoreMaskBits(d, full, bits[1]);
+        visit |= uint64_t(bits[0][0]) << k;
+        inside |= uint64_t(bits[1][0]) << k;
+        if constexpr (kCountBlocks) {
+          count.blocksCulled += hn::CountTrue(d, hn::And(inBox, beaten));
+          count.blocksEmpty += hn::CountTrue(d, hn::AndNot(beaten, hn::And(inBox, empty)));
         }
+      }
+      for (; visit; visit &= visit - 1) {
+        const int bx = int(hwy::Num0BitsBelowLS1Bit_Nonzero64(visit));
+        const int b = by * kBlocksX + bx;
+        const bool full = inside >> bx & 1;
+        const int cx0 = std::max(bx * kBlockSize, rx0), cx1 = std::min(bx * kBlockSize + kBlockSize - 1, rx1);
         if constexpr (kCountBlocks) ++(full ? count.blocksFull : count.blocksPartial);
         // A block the triangle covers whole (every pixel centre of the block, in the image):
         // the triangle's bounds over its corner centres (storedRangeOverRect; every covered
@@ -629,6 +652,7 @@ void RasterizeTileT(const TileJob& job) {
           if (storedNearer<M>(written, s.tileNear)) s.tileNear = written;
         }
       }
+    }
   }
   if (job.pass == TileJob::Pass::Front && s.state == TileState::Pixels) {
     // Exact block bounds for the deferred back faces' test (tiled.cpp, selectLate).
