@@ -32,7 +32,7 @@ cmake --build "$build" --target hsr_peer_llvmpipe
 echo
 echo "date: $(date -u '+%Y-%m-%d %H:%M UTC'); commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
 echo "cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), $(nproc) cores; load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
-echo "size $size, $frames frames interleaved after 2 warm-up frames, hsr --threads $threads --raster $raster --outputs $outputs (each frame also with all four buffers), LP_NUM_THREADS=$threads"
+echo "size $size, $frames frames interleaved after at least 2 warm-up frames and 1 s, hsr --threads $threads --raster $raster --outputs $outputs (each frame also with all four buffers), LP_NUM_THREADS=$threads"
 
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT

@@ -155,8 +155,8 @@ TEST_F(CommandLine, OutputsListKeepsOnlyWhatIsAsked) {
   EXPECT_EQ(readText(file("part.npy")), readText(file("full.npy")));
   EXPECT_EQ(readText(file("part_d.npy")), readText(file("full_d.npy")));
   EXPECT_EQ(readText(file("part.png")), readText(file("full.png")));
-  Result full = hsr("bench builtin:cubes --size 64x48 --frames 1 --json");
-  Result part = hsr("bench builtin:cubes --size 64x48 --frames 1 --json --outputs face,depth");
+  Result full = hsr("bench builtin:cubes --size 64x48 --frames 1 --warmup-time 0 --json");
+  Result part = hsr("bench builtin:cubes --size 64x48 --frames 1 --warmup-time 0 --json --outputs face,depth");
   ASSERT_EQ(full.status, 0) << full;
   ASSERT_EQ(part.status, 0) << part;
   const nlohmann::json f = nlohmann::json::parse(full.out), p = nlohmann::json::parse(part.out);
@@ -188,10 +188,11 @@ TEST_F(CommandLine, StatsJsonHasConventionKeys) {
 }
 
 TEST_F(CommandLine, BenchJsonHasTimesAndStatistics) {
-  Result r = hsr("bench builtin:cubes --frames 3 --json --size 64x48");
+  Result r = hsr("bench builtin:cubes --frames 3 --warmup 4 --warmup-time 0 --json --size 64x48");
   ASSERT_EQ(r.status, 0) << r;
   nlohmann::json bench = nlohmann::json::parse(r.out);
   EXPECT_EQ(bench["frames"], 3);
+  EXPECT_EQ(bench["warmup"], 4);  // frames only, with --warmup-time 0
   EXPECT_GT(bench["median_ms"].get<double>(), 0.0);
   EXPECT_LE(bench["min_ms"].get<double>(), bench["median_ms"].get<double>());
   EXPECT_EQ(bench["frame_ms"].size(), 3u);
@@ -205,13 +206,27 @@ TEST_F(CommandLine, BenchJsonHasTimesAndStatistics) {
   EXPECT_FALSE(bench["cpu"].get<std::string>().empty());
 }
 
+TEST_F(CommandLine, BenchWarmsUpForAtLeastItsTime) {
+  // Untimed frames until both --warmup frames and --warmup-time seconds are done.
+  Result r = hsr("bench builtin:cubes --frames 1 --warmup 0 --warmup-time 0.3 --json --size 64x48");
+  ASSERT_EQ(r.status, 0) << r;
+  nlohmann::json bench = nlohmann::json::parse(r.out);
+  EXPECT_GE(bench["warmup_ms"].get<double>(), 300.0);
+  EXPECT_GE(bench["warmup"].get<int>(), 1);
+  EXPECT_EQ(bench["frames"], 1);
+  r = hsr("bench builtin:cubes --frames 1 --warmup 0 --warmup-time 0 --json --size 64x48");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["warmup"], 0);
+  EXPECT_NE(hsr("bench builtin:cubes --warmup-time -1").status, 0);
+}
+
 // --occlusion times the occlusion buffer: its statistics, and the depth-only frame's coverage.
 TEST_F(CommandLine, BenchOcclusionTimesTheOcclusionBuffer) {
-  Result r = hsr("bench builtin:city --frames 2 --json --size 160x90 --occlusion");
+  Result r = hsr("bench builtin:city --frames 2 --warmup-time 0 --json --size 160x90 --occlusion");
   ASSERT_EQ(r.status, 0) << r;
   nlohmann::json bench = nlohmann::json::parse(r.out);
   EXPECT_EQ(bench["algorithm"], "occlusion");
-  Result d = hsr("bench builtin:city --frames 1 --json --size 160x90 --depth-only");
+  Result d = hsr("bench builtin:city --frames 1 --warmup-time 0 --json --size 160x90 --depth-only");
   ASSERT_EQ(d.status, 0) << d;
   nlohmann::json depth = nlohmann::json::parse(d.out);
   EXPECT_EQ(bench["covered_pixels"], depth["covered_pixels"]);

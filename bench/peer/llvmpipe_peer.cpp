@@ -37,6 +37,7 @@ struct Options {
   int width = 0, height = 0;
   int frames = 10;
   int warmup = 2;
+  double warmupSeconds = 1;  // warm-up iterations for at least this long too
   int threads = 0;                 // 0: all cores, for hsr and llvmpipe alike
   std::string raster = "default";  // hsr's z-buffer rasterizer: its default or a named one
   // hsr's buffers: by default those of the GL framebuffer (colour, face id, depth); every frame
@@ -350,7 +351,7 @@ int run(Options& o) {
   GlRenderer gl(scene, camera);
 
   // Interleaved: each iteration times one hsr frame, then one GL frame, so both see the same
-  // machine load. The first `warmup` iterations (llvmpipe compiles its shaders) are not timed.
+  // machine load. The warm-up iterations (llvmpipe compiles its shaders) are not timed.
   // A third timing is hsr with all four of its buffers (triangle ids too, when --outputs leaves
   // some out), into a frame of its own, and the two hsr frames swap places every iteration (the
   // one right after the GL frame finds caches and idle threads as llvmpipe left them); a fourth
@@ -364,7 +365,7 @@ int run(Options& o) {
     work();
     return msSince(start);
   };
-  for (int i = 0; i < o.warmup + o.frames; ++i) {
+  auto iteration = [&](int i, bool record) {
     // (each reuses its frame's buffers, as GL reuses its FBO)
     auto renderHsr = [&] { return timed([&] { hsr::render(scene, camera, hsrOptions, frame); }); };
     auto renderAll = [&] { return timed([&] { hsr::render(scene, camera, allOptions, allFrame); }); };
@@ -373,13 +374,20 @@ int run(Options& o) {
     const double glFrameMs = timed([&] { gl.drawFrame(hsrOptions.background); });
     const double secondMs = hsrFirst ? renderAll() : renderHsr();
     const double writeFrameMs = timed([&] { written.clear(hsrOptions.background, threads); });
-    if (i >= o.warmup) {
+    if (record) {
       hsrMs.push_back(hsrFirst ? firstMs : secondMs);
       glMs.push_back(glFrameMs);
       allMs.push_back(hsrFirst ? secondMs : firstMs);
       writeMs.push_back(writeFrameMs);
     }
-  }
+  };
+  // Warm-up: o.warmup iterations, and more until o.warmupSeconds have passed (a new process on
+  // this project's VMs runs slower for its first ~0.5 s; see docs/benchmarks.md).
+  const auto warmupStart = std::chrono::steady_clock::now();
+  int warmupIterations = 0;
+  while (warmupIterations < o.warmup || msSince(warmupStart) < 1e3 * o.warmupSeconds)
+    iteration(warmupIterations++, false);
+  for (int i = 0; i < o.frames; ++i) iteration(warmupIterations + i, true);
   if (allFrame.faceId != frame.faceId)
     throw std::runtime_error("hsr's face ids differ between --outputs " + o.outputs + " and all four buffers");
   const Timing hsrTime = summarize(hsrMs), glTime = summarize(glMs), allTime = summarize(allMs),
@@ -414,7 +422,7 @@ int run(Options& o) {
     out["hsr_raster"] = o.raster;
     out["hsr_outputs"] = hsr::frameOutputsName(hsrOptions.outputs);
     out["frames"] = o.frames;
-    out["warmup"] = o.warmup;
+    out["warmup"] = warmupIterations;
     out["gl_renderer"] = renderer;
     out["gl_version"] = version;
     out["hsr_median_ms"] = hsrTime.median;
@@ -442,7 +450,7 @@ int run(Options& o) {
                writeTime.median, allTime.median, ratioAll, 100.0 * ids.equalFraction(), ids.nonEdgeMismatches);
   } else {
     fmt::print("{}: {} triangles, {}x{}, {} threads, {} frames interleaved ({} warm-up)\n", o.scene,
-               scene.triangles.size(), o.width, o.height, threads, o.frames, o.warmup);
+               scene.triangles.size(), o.width, o.height, threads, o.frames, warmupIterations);
     fmt::print("  hsr zbuffer ({} raster, outputs {}): median {:.2f} ms, min {:.2f} ms\n", o.raster,
                hsr::frameOutputsName(hsrOptions.outputs), hsrTime.median, hsrTime.min);
     fmt::print("  llvmpipe:    median {:.2f} ms, min {:.2f} ms\n", glTime.median, glTime.min);
@@ -475,6 +483,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   app.add_option("--warmup", o.warmup, "Untimed frames first")->check(CLI::Range(0, 100000))->capture_default_str();
+  app.add_option("--warmup-time", o.warmupSeconds, "Untimed frames for at least this many seconds too")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
   app.add_option("--threads", o.threads, "Threads of hsr and llvmpipe (LP_NUM_THREADS); 0 = all cores")
       ->check(CLI::Range(0, 1024))
       ->capture_default_str();
