@@ -22,7 +22,7 @@ command -v python3 >/dev/null || scripts/install-deps.sh python3
 
 echo "date: $(date -u '+%Y-%m-%d %H:%M UTC'); commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
 echo "cpu: $(grep -m1 "model name" /proc/cpuinfo | cut -d: -f2- | sed "s/^ //"), $(nproc) cores"
-echo "size 1920x1080, $rounds alternating rounds of $frames frames (2 warm-up), --threads $threads, depth f32:reversed"
+echo "size 1920x1080, $rounds alternating rounds of $frames frames (after at least 2 warm-up frames and 1 s), --threads $threads, depth f32:reversed"
 echo
 echo "| scene | triangles | depth image ms | occlusion buffer ms | occlusion buffer, back faces culled, ms | MOC ms (issue's figure, 1 thread) | target ms |"
 echo "|---|---:|---:|---:|---:|---:|---:|"
