@@ -108,6 +108,17 @@ HWY_INLINE V StoredDepth(const MappedPlanes& m, V X, double Y) {
   return Quantize<S>(Clamp01(hn::Div(p, q)));
 }
 
+// StoredDepth with a X of both planes given (pX = m.p.a X, qX = m.q.a X, as StoredDepth computes
+// them) and b Y broadcast (pY, qY): the same bits.
+template <DepthStorage S>
+HWY_INLINE V StoredDepthAt(const MappedPlanes& m, V pX, V pY, V qX, V qY) {
+  const D d;
+  const V p = hn::Add(hn::Add(pX, pY), hn::Set(d, m.p.c));
+  if (m.affine) return Quantize<S>(Clamp01(p));  // q = 1: p / q is p
+  const V q = hn::Add(hn::Add(qX, qY), hn::Set(d, m.q.c));
+  return Quantize<S>(Clamp01(hn::Div(p, q)));
+}
+
 // The farther / nearer of two vectors of stored values, lane by lane.
 template <bool kGreater>
 HWY_INLINE V Farther(V a, V b) {
@@ -593,31 +604,47 @@ void RasterizeTileT(const TileJob& job) {
         if (Lazy(s, b)) MaterializeBlock<S, M, kIds>(job, tf, b);
 
         const int bxPixel = bx * kBlockSize;  // tile-local x of the block's first column
-        const V colLo = hn::Set(d, double(cx0)), colHi = hn::Set(d, double(cx1));
-        int64_t rowE[3];  // edge functions at the block's first column, current row
-        for (int i = 0; i < 3; ++i) rowE[i] = e[i].at(centerFixed(x0 + bxPixel), centerFixed(y0 + cy0));
+        // Per vector of the block's row (k / N): its columns in the box, a X of both planes
+        // (the same bits StoredDepth computes), and the edge functions at its pixels in the
+        // current row, stepped row by row (integers below 2^49: exact in double).
+        constexpr size_t kMaxVectors = size_t(kBlockSize);
+        V columnIn[kMaxVectors], pX[kMaxVectors], qX[kMaxVectors], edgeRow[3][kMaxVectors];
+        const V stepYV[3] = {hn::Set(d, double(e[0].stepY())), hn::Set(d, double(e[1].stepY())),
+                             hn::Set(d, double(e[2].stepY()))};
+        for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+          const V col = hn::Add(lane, hn::Set(d, double(bxPixel + int(k))));
+          columnIn[k / N] = hn::VecFromMask(d, hn::And(hn::Ge(col, hn::Set(d, double(cx0))), hn::Le(col, hn::Set(d, double(cx1)))));
+          const V X = hn::Add(col, hn::Set(d, double(x0) + 0.5));
+          pX[k / N] = hn::Mul(hn::Set(d, m.p.a), X);
+          qX[k / N] = hn::Mul(hn::Set(d, m.q.a), X);
+          if (!full)
+            for (int i = 0; i < 3; ++i) {
+              const int64_t at = e[i].at(centerFixed(x0 + bxPixel + int(k)), centerFixed(y0 + cy0));
+              edgeRow[i][k / N] = hn::Add(hn::Set(d, double(at)), laneE[i]);
+            }
+        }
         // The block's farthest value after this triangle, gathered from the rows it visits.
         V far = nearestV, nearestWritten = farthestV;
         V wroteMask = hn::Zero(d);
         for (int y = cy0; y <= cy1; ++y) {
           const double Y = double(y0 + y) + 0.5;
+          const V pY = hn::Set(d, m.p.b * Y), qY = hn::Set(d, m.q.b * Y);
           for (size_t k = 0; k < size_t(kBlockSize); k += N) {
             const size_t at = size_t(y) * kTileSize + size_t(bxPixel) + k;
             const V stored = hn::Load(d, s.depth + at);
             V result = stored;
-            const V col = hn::Add(lane, hn::Set(d, double(bxPixel + int(k))));
-            Mask cover = hn::And(hn::Ge(col, colLo), hn::Le(col, colHi));
+            Mask cover = hn::MaskFromVec(columnIn[k / N]);
             if (!full)
               for (int i = 0; i < 3; ++i) {
-                const V edgeV = hn::Add(hn::Set(d, double(rowE[i] + int64_t(k) * e[i].stepX())), laneE[i]);
-                cover = hn::And(cover, hn::Ge(edgeV, biasV[i]));
+                cover = hn::And(cover, hn::Ge(edgeRow[i][k / N], biasV[i]));
+                edgeRow[i][k / N] = hn::Add(edgeRow[i][k / N], stepYV[i]);
               }
             // Only pixels where something farther than the triangle's nearest value is stored
             // can change (counted as tested). The row is computed without branches either
             // way: a mispredicted branch costs more than the division it would save.
             const Mask maybe = hn::And(cover, kIds ? NotFarther<kGreater>(qNearV, stored) : Nearer<kGreater>(qNearV, stored));
             // Pixel centres X = x + 0.5; depth = P(X, Y) / Q(X, Y) (raster/fragment_depth.hpp).
-            const V z = constantDepth ? zConstant : StoredDepth<S>(m, hn::Add(col, hn::Set(d, double(x0) + 0.5)), Y);
+            const V z = constantDepth ? zConstant : StoredDepthAt<S>(m, pX[k / N], pY, qX[k / N], qY);
             Mask win = hn::And(maybe, Nearer<kGreater>(z, stored));
             if constexpr (kIds) {  // a tie goes to the triangle submitted first
               const auto old = hn::Load(du, s.triangle + at);
@@ -625,16 +652,16 @@ void RasterizeTileT(const TileJob& job) {
               win = hn::Or(win, hn::And(maybe, tie));
               hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
             }
-            tests += hn::CountTrue(d, maybe);
+            const size_t tested = hn::CountTrue(d, maybe);
+            tests += tested;
             writes += hn::CountTrue(d, win);
             result = hn::IfThenElse(win, z, stored);
             hn::Store(result, d, s.depth + at);
             nearestWritten = NearerOf<kGreater>(nearestWritten, hn::IfThenElse(win, z, farthestV));
             wroteMask = hn::Or(wroteMask, hn::VecFromMask(d, win));
-            if constexpr (kCountBlocks) count.rowsCulled += hn::AllFalse(d, maybe) && !hn::AllFalse(d, cover);
+            if constexpr (kCountBlocks) count.rowsCulled += tested == 0 && !hn::AllFalse(d, cover);
             far = Farther<kGreater>(far, result);
           }
-          for (int i = 0; i < 3; ++i) rowE[i] += e[i].stepY();
         }
         if (!hn::AllFalse(d, hn::MaskFromVec(wroteMask))) {
           // The block's rows outside the triangle's box kept their values.
