@@ -76,6 +76,7 @@ uint64_t Bins::memoryBytes() const {
     for (const ChunkBins& c : *set)
       bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.pairs.capacity() * sizeof(uint64_t) +
                (c.itemNearest.capacity() + c.cover.capacity() + c.slotNearest.capacity()) * sizeof(double) +
+               c.slotBox.capacity() * sizeof(ChunkBins::Box) +
                (c.itemBox.capacity() + c.touched.capacity()) * sizeof(uint32_t) + c.records.capacity() * sizeof(SetupTriangle) +
                c.setUpCapacity + c.survivors.capacity() + sizeof(c);
   return bytes;
@@ -343,6 +344,7 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
   for (size_t i = 0; i < k; ++i) cl.setUp[i].store(0, std::memory_order_relaxed);
   cl.survivors.assign(k, 0);
   cl.slotNearest.resize(m + k * kClusterTriangles);
+  cl.slotBox.resize(m + k * kClusterTriangles);
   cl.pairs.clear();
   for (size_t i = 0; i < k; ++i) {
     const DeferredCluster& d = clusters[i];
@@ -439,7 +441,10 @@ void setUpCluster(const Bins& bins, size_t c, size_t k, const DepthSetup& depth,
   // Set up straight into the slots (the survivors in order, from `slot` on).
   const size_t n = setupBatch(bins.projected, v, tri, face, kClusterTriangles, *bins.camera, Cull::None, ignored, out,
                               &depth, cl.slotNearest.data() + slot);
-  for (size_t i = 0; i < n; ++i) out[i].frontFacing = false, out[i].color = Rgba8{};
+  for (size_t i = 0; i < n; ++i) {
+    out[i].frontFacing = false, out[i].color = Rgba8{};
+    cl.slotBox[slot + i] = {out[i].minX, out[i].minY, out[i].maxX, out[i].maxY};
+  }
   cl.survivors[k] = uint8_t(n);
   counters.setUpLate += n;
   state.store(2, std::memory_order_release);
@@ -527,15 +532,16 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
         setUpCluster(bins, c, k, depth, counters);
         const SetupTriangle* records = bins.late[c].records.data();
         for (uint32_t slot = cl.clusterSlot(k), last = slot + cl.survivors[k]; slot < last; ++slot) {
-          const SetupTriangle& t = records[slot];
-          const int x0 = std::max(t.minX - tx0, 0), x1 = std::min(t.maxX - tx0, kTileSize - 1);
-          const int y0 = std::max(t.minY - ty0, 0), y1 = std::min(t.maxY - ty0, kTileSize - 1);
+          const ChunkBins::Box& box = cl.slotBox[slot];
+          const int x0 = std::max(box.minX - tx0, 0), x1 = std::min(box.maxX - tx0, kTileSize - 1);
+          const int y0 = std::max(box.minY - ty0, 0), y1 = std::min(box.maxY - ty0, kTileSize - 1);
           if (x0 > x1 || y0 > y1) continue;  // (not in this tile)
           if (hidden(cl.slotNearest[slot], x0, y0, x1, y1)) {
             ++counters.culledTiles;
             continue;
           }
-          order.late.push_back({triangleKey(c, localKey(t.triangle - firstTriangle, true, slot)), cl.slotNearest[slot]});
+          const uint32_t triangle = records[slot].triangle;
+          order.late.push_back({triangleKey(c, localKey(triangle - firstTriangle, true, slot)), cl.slotNearest[slot]});
         }
       }
     });

@@ -122,6 +122,10 @@ struct ChunkBins {
   size_t setUpCapacity = 0;
   mutable std::vector<uint8_t> survivors;  // (written by the worker that sets the cluster up)
   mutable std::vector<double> slotNearest;
+  struct Box {
+    int16_t minX, minY, maxX, maxY;  // SetupTriangle's
+  };
+  mutable std::vector<Box> slotBox;  // per slot, its record's pixel box (the tiles' test reads 8 bytes, not the record)
   uint32_t clusterSlot(size_t k) const { return firstSlot + uint32_t(k * kClusterTriangles); }
 };
 
