@@ -480,13 +480,21 @@ void TransformVertices(const dvec3* positions, size_t count, const dmat4& matrix
     // projectVertex: every lane.
     const V sx = hn::Div(hx, w), sy = hn::Div(hy, w);
     const V num = hn::Div(depth, w), den = hn::Div(one, w);
-    uint8_t bits[6][8] = {};
-    for (int p = 0; p < 6; ++p) hn::StoreMaskBits(d, outside[p], bits[p]);
-    for (size_t j = 0; j < lanes; ++j) {
-      uint8_t code = 0;
-      for (int p = 0; p < 6; ++p) code |= uint8_t(((bits[p][0] >> j) & 1) << p);
-      outcodes[first + j] = code;
+    // The six masks as the rows of an 8x8 bit matrix (byte p, bit j: lane j outside plane p),
+    // transposed (Hacker's Delight 7-3): byte j becomes lane j's outcode.
+    uint64_t matrix = 0;
+    for (int p = 0; p < 6; ++p) {
+      uint8_t bits[8] = {};
+      hn::StoreMaskBits(d, outside[p], bits);
+      matrix |= uint64_t(bits[0]) << (8 * p);
     }
+    matrix = (matrix & 0xAA55AA55AA55AA55ull) | ((matrix & 0x00AA00AA00AA00AAull) << 7) |
+             ((matrix >> 7) & 0x00AA00AA00AA00AAull);
+    matrix = (matrix & 0xCCCC3333CCCC3333ull) | ((matrix & 0x0000CCCC0000CCCCull) << 14) |
+             ((matrix >> 14) & 0x0000CCCC0000CCCCull);
+    matrix = (matrix & 0xF0F0F0F00F0F0F0Full) | ((matrix & 0x00000000F0F0F0F0ull) << 28) |
+             ((matrix >> 28) & 0x00000000F0F0F0F0ull);
+    for (size_t j = 0; j < lanes; ++j) outcodes[first + j] = uint8_t(matrix >> (8 * j));
     if (lanes == N) {  // N whole records at once (a vertex outside gets values no triangle reads)
       static_assert(sizeof(ProjectedVertex) == 4 * sizeof(double));
       hn::StoreInterleaved4(sx, sy, num, den, d, reinterpret_cast<double*>(projected + first));
