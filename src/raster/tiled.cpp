@@ -77,7 +77,8 @@ uint64_t Bins::memoryBytes() const {
       bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.pairs.capacity() * sizeof(uint64_t) +
                (c.itemNearest.capacity() + c.cover.capacity() + c.slotNearest.capacity()) * sizeof(double) +
                c.slotBox.capacity() * sizeof(ChunkBins::Box) +
-               (c.itemBox.capacity() + c.touched.capacity()) * sizeof(uint32_t) + c.records.capacity() * sizeof(SetupTriangle) +
+               (c.itemBox.capacity() + c.touched.capacity()) * sizeof(uint32_t) +
+               c.touchedBits.capacity() * sizeof(uint64_t) + c.records.capacity() * sizeof(SetupTriangle) +
                c.setUpCapacity + c.survivors.capacity() + sizeof(c);
   return bytes;
 }
@@ -242,9 +243,11 @@ namespace {
 
 // Sorts cb.pairs (tile << 32 | name: a localKey, or the index of a deferred face or cluster) by
 // tile into cb.start/items/itemNearest (a counting sort, stable: each tile's items stay in
-// submission order), each item itemOf(name) with its nearest bound nearestOf(localIndex(name)).
-template <class ItemOf, class NearestOf>
-void sortPairs(ChunkBins& cb, size_t tiles, ItemOf&& itemOf, NearestOf&& nearestOf) {
+// submission order), each item itemOf(name) with its nearest bound nearestOf(localIndex(name)),
+// and placed(item, tile, name) called for each. Marks the tiles with items in `touched` (bit t).
+template <class ItemOf, class NearestOf, class Placed>
+void sortPairs(ChunkBins& cb, size_t tiles, ItemOf&& itemOf, NearestOf&& nearestOf, Placed&& placed,
+               uint64_t* touched) {
   cb.start.assign(tiles + 1, 0);
   // Run by run of pairs in one tile (neighbouring triangles mostly share theirs): a counter
   // incremented pair by pair in memory made each increment wait for the one before.
@@ -258,18 +261,22 @@ void sortPairs(ChunkBins& cb, size_t tiles, ItemOf&& itemOf, NearestOf&& nearest
   };
   for (size_t i = 0, j; i < n; i = j) {
     j = runEnd(i);
-    cb.start[(pairs[i] >> 32) + 1] += uint32_t(j - i);
+    const uint64_t tile = pairs[i] >> 32;
+    cb.start[tile + 1] += uint32_t(j - i);
+    touched[tile / 64] |= uint64_t(1) << (tile % 64);
   }
   for (size_t t = 0; t < tiles; ++t) cb.start[t + 1] += cb.start[t];
   cb.items.resize(n);
   cb.itemNearest.resize(n);
   for (size_t i = 0, j; i < n; i = j) {
     j = runEnd(i);
-    uint32_t& next = cb.start[pairs[i] >> 32];
+    const uint32_t tile = uint32_t(pairs[i] >> 32);
+    uint32_t& next = cb.start[tile];
     for (size_t k = i; k < j; ++k) {
       cb.items[next + (k - i)] = itemOf(uint32_t(pairs[k]));
       // Next to the item: the tile pass reads them in order.
       cb.itemNearest[next + (k - i)] = nearestOf(localIndex(uint32_t(pairs[k])));
+      placed(next + uint32_t(k - i), tile, uint32_t(pairs[k]));
     }
     next += uint32_t(j - i);
   }
@@ -299,13 +306,16 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
     });
   }
   const double* nearest = triangles.nearest.data();
+  // The tiles with items of the chunk in any of the three sets (bit t), for cb.touched.
+  cb.touchedBits.assign((tiles + 63) / 64, 0);
+  const auto nothing = [](uint32_t, uint32_t, uint32_t) {};
   for (size_t i = 0; i < n; ++i) {
     const uint32_t local = localKey(tris[i].triangle - firstTriangle, false, uint32_t(i));
     if (cull) binTriangle<true>(tris[i], local, bins.tilesX, cb.pairs, cb.cover.data(), nearest[i], greater, &cb.culled);
     else binTriangle<false>(tris[i], local, bins.tilesX, cb.pairs);
   }
   const auto same = [](uint32_t item) { return item; };
-  sortPairs(cb, tiles, same, [&](uint32_t i) { return nearest[i]; });
+  sortPairs(cb, tiles, same, [&](uint32_t i) { return nearest[i]; }, nothing, cb.touchedBits.data());
 
   // The deferred back faces, each in its one tile: a counting sort by tile (stable).
   ChunkBins& late = bins.late[chunk];
@@ -322,15 +332,16 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
     const uint32_t tile = uint32_t(f.minY / kTileSize) * uint32_t(bins.tilesX) + uint32_t(f.minX / kTileSize);
     late.pairs.push_back(uint64_t(tile) << 32 | i);
   }
+  late.itemBox.resize(m);
   sortPairs(
       late, tiles, [&](uint32_t i) { return localKey(faces[i].triangle - firstTriangle, true, i); },
-      [&](uint32_t i) { return faces[i].nearest; });
-  late.itemBox.resize(m);
-  for (size_t item = 0; item < m; ++item) {
-    const DeferredFace& f = faces[localIndex(late.items[item])];
-    const uint32_t x0 = uint32_t(f.minX % kTileSize), y0 = uint32_t(f.minY % kTileSize);
-    late.itemBox[item] = x0 | y0 << 8 | uint32_t(x0 + f.maxX - f.minX) << 16 | uint32_t(y0 + f.maxY - f.minY) << 24;
-  }
+      [&](uint32_t i) { return faces[i].nearest; },
+      [&](uint32_t item, uint32_t, uint32_t i) {  // the face's box in its tile
+        const DeferredFace& f = faces[i];
+        const uint32_t x0 = uint32_t(f.minX % kTileSize), y0 = uint32_t(f.minY % kTileSize);
+        late.itemBox[item] = x0 | y0 << 8 | uint32_t(x0 + f.maxX - f.minX) << 16 | uint32_t(y0 + f.maxY - f.minY) << 24;
+      },
+      cb.touchedBits.data());
 
   // The deferred clusters, in every tile their box overlaps (a counting sort by tile, stable).
   ChunkBins& cl = bins.clusters[chunk];
@@ -352,21 +363,21 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
       for (int tx = d.minX / kTileSize; tx <= d.maxX / kTileSize; ++tx)
         cl.pairs.push_back(uint64_t(ty * bins.tilesX + tx) << 32 | i);
   }
-  sortPairs(cl, tiles, same, [&](uint32_t i) { return clusters[i].nearest; });
-  cl.itemBox.resize(cl.items.size());
-  for (size_t t = 0; t < tiles && k > 0; ++t) {
-    const int tx0 = int(t % size_t(bins.tilesX)) * kTileSize, ty0 = int(t / size_t(bins.tilesX)) * kTileSize;
-    for (uint32_t item = cl.start[t]; item < cl.start[t + 1]; ++item) {
-      const DeferredCluster& d = clusters[cl.items[item]];
-      const uint32_t x0 = uint32_t(std::max(d.minX - tx0, 0)), y0 = uint32_t(std::max(d.minY - ty0, 0));
-      const uint32_t x1 = uint32_t(std::min(d.maxX - tx0, kTileSize - 1)), y1 = uint32_t(std::min(d.maxY - ty0, kTileSize - 1));
-      cl.itemBox[item] = x0 | y0 << 8 | x1 << 16 | y1 << 24;
-    }
-  }
+  cl.itemBox.resize(cl.pairs.size());
+  sortPairs(
+      cl, tiles, same, [&](uint32_t i) { return clusters[i].nearest; },
+      [&](uint32_t item, uint32_t t, uint32_t i) {  // the part of the cluster's box in tile t
+        const DeferredCluster& d = clusters[i];
+        const int tx0 = int(t % uint32_t(bins.tilesX)) * kTileSize, ty0 = int(t / uint32_t(bins.tilesX)) * kTileSize;
+        const uint32_t x0 = uint32_t(std::max(d.minX - tx0, 0)), y0 = uint32_t(std::max(d.minY - ty0, 0));
+        const uint32_t x1 = uint32_t(std::min(d.maxX - tx0, kTileSize - 1)), y1 = uint32_t(std::min(d.maxY - ty0, kTileSize - 1));
+        cl.itemBox[item] = x0 | y0 << 8 | x1 << 16 | y1 << 24;
+      },
+      cb.touchedBits.data());
   cb.touched.clear();
-  for (size_t t = 0; t < tiles; ++t)
-    if (cb.start[t + 1] > cb.start[t] || late.start[t + 1] > late.start[t] || cl.start[t + 1] > cl.start[t])
-      cb.touched.push_back(uint32_t(t));
+  for (size_t w = 0; w < cb.touchedBits.size(); ++w)
+    for (uint64_t bits = cb.touchedBits[w]; bits; bits &= bits - 1)
+      cb.touched.push_back(uint32_t(w * 64 + size_t(__builtin_ctzll(bits))));
 }
 
 uint64_t TileOrder::memoryBytes() const {

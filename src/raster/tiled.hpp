@@ -104,6 +104,7 @@ struct ChunkBins {
   // Bins::chunks only: the tiles that have items of this chunk in any of the three sets (chunks,
   // late, clusters), in order (binChunk), for countEntries' per-tile chunk lists.
   std::vector<uint32_t> touched;
+  std::vector<uint64_t> touchedBits;  // scratch of binChunk(): bit t, tile t is in `touched`
   // Bins::late only: per item, the face's pixel box in its tile (x0, y0, x1, y1: a byte each,
   // tile-local), next to the item for the tile pass's test; the chunk's deferred back faces
   // (FrontEndChunk::deferred) and their records, written by rasterizeTile when one may show (only
