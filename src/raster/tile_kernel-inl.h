@@ -607,8 +607,9 @@ void RasterizeTileT(const TileJob& job) {
         // Per vector of the block's row (k / N): its columns in the box, a X of both planes
         // (the same bits StoredDepth computes), and the edge functions at its pixels in the
         // current row, stepped row by row (integers below 2^49: exact in double).
-        constexpr size_t kMaxVectors = size_t(kBlockSize);
-        V columnIn[kMaxVectors], pX[kMaxVectors], qX[kMaxVectors], edgeRow[3][kMaxVectors];
+        constexpr size_t kVectors = size_t(kBlockSize) / hn::MaxLanes(D());  // per block row (1 on AVX-512)
+        static_assert(kVectors >= 1 && size_t(kBlockSize) % hn::MaxLanes(D()) == 0);
+        V columnIn[kVectors], pX[kVectors], qX[kVectors], edgeRow[3][kVectors];
         const V stepYV[3] = {hn::Set(d, double(e[0].stepY())), hn::Set(d, double(e[1].stepY())),
                              hn::Set(d, double(e[2].stepY()))};
         for (size_t k = 0; k < size_t(kBlockSize); k += N) {
