@@ -120,6 +120,41 @@ TEST(Clip, BeyondTheFarPlaneIsCulled) {
   EXPECT_EQ(r.frame.stats.culled_frustum, 1u);
 }
 
+TEST(Clip, AMeshWhollyBehindTheCameraIsCulledWholeAndTheOtherDrawn) {
+  // Mesh "behind" (two triangles) lies wholly behind the eye, mesh "front" (one) in view: only
+  // the first is culled, by its box. Then a camera turned round sees both: nothing of the
+  // previous frame's culling may stay (the tiled state is reused from frame to frame).
+  Scene s;
+  s.source = "test:two meshes";
+  s.positions = {{1.5, -1, 3}, {3.5, -1, 3}, {2.5, 1, 4}, {1.5, 1, 3}, {-1, -0.5, -5}, {1, -0.5, -5}, {0, 0.8, -5}};
+  s.beginMesh("behind");
+  s.addFace({0, 1, 2}, {255, 0, 0, 255});
+  s.addFace({0, 2, 3}, {255, 0, 0, 255});
+  s.beginMesh("front");
+  s.addFace({4, 5, 6}, {0, 255, 0, 255});
+  s.finalize();
+  ASSERT_EQ(s.meshes.size(), 2u);
+  RenderOptions opt;
+  opt.threads = 1;
+  const Frame ahead = render(s, originCamera(), opt);
+  EXPECT_EQ(ahead.stats.culled_frustum, 2u);
+  uint64_t front = 0;
+  for (int32_t id : ahead.faceId) {
+    EXPECT_TRUE(id == -1 || id == 2) << id;
+    front += id == 2;
+  }
+  EXPECT_GT(front, 100u);
+  // From (0, 0, -10) looking down +z: both meshes in front of the eye, between near and far.
+  const Camera back = resolveCamera(test::lookAt({0, 0, -10}, {0, 0, 1}, 60, 1, 20), W, H, {});
+  const Frame both = render(s, back, opt);
+  EXPECT_EQ(both.stats.culled_frustum, 0u);
+  bool seen[3] = {};
+  for (int32_t id : both.faceId)
+    if (id >= 0 && id < 3) seen[id] = true;
+  EXPECT_TRUE(seen[0] || seen[1]);
+  EXPECT_TRUE(seen[2]);
+}
+
 TEST(Clip, CrossingTheFarPlane) {
   Result r = check(triangleScene({-3, -2, -4}, {3, -2, -4}, {0, 3, -20}));
   EXPECT_EQ(r.mismatches, 0);

@@ -401,7 +401,7 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
   static_assert(kChunkTriangles % kClusterTriangles == 0, "a cluster lies in one chunk");
   for (size_t ti = begin; ti < end; ++ti) {
     const Triangle& tri = scene.triangles[ti];
-    if (clusters && ti % kClusterTriangles == 0 && fe.faceVisible[tri.face]) {  // (a cluster is in one mesh)
+    if (clusters && ti % kClusterTriangles == 0 && fe.meshInView(tri.face)) {  // (a cluster is in one mesh)
       const TriangleCluster& cluster = scene.clusters[ti / kClusterTriangles];
       if (ti + kClusterTriangles < end) {  // the next cluster (a culled or deferred one is skipped: no stream to follow)
         __builtin_prefetch(&cluster + 1);
@@ -423,7 +423,7 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
         }
       }
     }
-    if (!fe.faceVisible[tri.face]) {
+    if (!fe.meshInView(tri.face)) {
       ++counters.culledFrustum;
       continue;
     }
@@ -467,7 +467,8 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
 
   // Object-level view culling: a mesh whose bounding box lies wholly outside one clipping plane
   // is skipped without touching its triangles.
-  out.faceVisible.assign(scene.faceCount(), 1);
+  // (faceVisible stays empty unless a mesh is culled: then one byte per face.)
+  out.faceVisible.clear();
   for (const MeshRange& mesh : scene.meshes) {
     const Bounds3& b = mesh.bounds;  // computed once, by Scene::finalize()
     if (b.empty()) continue;
@@ -477,8 +478,9 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
       dvec4 h = cam.toPixelH(p);
       all &= clipOutcode({h.x, h.y, h.z, h.w}, cam);
     }
-    if (all)
-      std::fill(out.faceVisible.begin() + mesh.firstFace, out.faceVisible.begin() + mesh.firstFace + mesh.faceCount, 0);
+    if (!all) continue;
+    if (out.faceVisible.empty()) out.faceVisible.assign(scene.faceCount(), 1);
+    std::fill(out.faceVisible.begin() + mesh.firstFace, out.faceVisible.begin() + mesh.firstFace + mesh.faceCount, 0);
   }
 
   // Every vertex once, in double, straight from world to homogeneous pixel coordinates; those

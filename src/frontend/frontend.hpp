@@ -214,7 +214,11 @@ struct FrontEndOutput : FrontEndCounters {
   dmat4 pixelFromWorld{1.0};  // the frame's world -> homogeneous pixel transform
   std::vector<uint8_t> outcodes;
   std::vector<ProjectedVertex> projected;
+  // Per face, 0 when its mesh's box lies wholly outside a clipping plane; empty when no mesh
+  // is (the usual case: no 1-byte-per-face pass over memory each frame).
   std::vector<uint8_t> faceVisible;
+  /// Whether face `face`'s mesh was not culled whole (see faceVisible).
+  bool meshInView(uint32_t face) const { return faceVisible.empty() || faceVisible[face]; }
 };
 
 /// Called on a worker thread with each chunk's index as soon as the chunk is set up; chunks may
