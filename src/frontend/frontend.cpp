@@ -334,7 +334,7 @@ std::vector<SetupTriangle> FrontEndOutput::flatten() const {
 
 uint64_t FrontEndOutput::memoryBytes() const {
   uint64_t bytes = outcodes.capacity() +
-                   projected.capacity() * sizeof(ProjectedVertex) + faceVisible.capacity();
+                   projected.capacity() * sizeof(ProjectedVertex) + faceVisible.capacity() + meshCulled.capacity();
   for (const auto& c : chunks)
     bytes += c.triangles.capacity() * sizeof(SetupTriangle) + c.nearest.capacity() * sizeof(double) +
              c.deferred.capacity() * sizeof(DeferredFace) + c.clusters.capacity() * sizeof(DeferredCluster);
@@ -466,22 +466,22 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
   const int threads = resolveThreads(options.threads);
 
   // Object-level view culling: a mesh whose bounding box lies wholly outside one clipping plane
-  // is skipped without touching its triangles.
-  // (faceVisible stays empty unless a mesh is culled: then one byte per face.)
-  out.faceVisible.clear();
-  for (const MeshRange& mesh : scene.meshes) {
+  // is skipped without touching its triangles. Its eight corners are tested on the workers, a
+  // run of meshes per item beside the vertex pass's items (the city has 3601 meshes: as many
+  // corners as vertices); faceVisible stays empty unless a mesh is culled: then a byte per face.
+  const size_t meshCount = scene.meshes.size();
+  out.meshCulled.resize(meshCount);
+  auto meshOutside = [&](const MeshRange& mesh) {
     const Bounds3& b = mesh.bounds;  // computed once, by Scene::finalize()
-    if (b.empty()) continue;
+    if (b.empty()) return false;
     uint32_t all = (1u << kPlanes) - 1;
     for (int c = 0; c < 8; ++c) {
       dvec3 p{c & 1 ? b.hi.x : b.lo.x, c & 2 ? b.hi.y : b.lo.y, c & 4 ? b.hi.z : b.lo.z};
       dvec4 h = cam.toPixelH(p);
       all &= clipOutcode({h.x, h.y, h.z, h.w}, cam);
     }
-    if (!all) continue;
-    if (out.faceVisible.empty()) out.faceVisible.assign(scene.faceCount(), 1);
-    std::fill(out.faceVisible.begin() + mesh.firstFace, out.faceVisible.begin() + mesh.firstFace + mesh.faceCount, 0);
-  }
+    return all != 0;
+  };
 
   // Every vertex once, in double, straight from world to homogeneous pixel coordinates; those
   // inside the clip volume are projected and snapped here, shared by all their triangles.
@@ -491,11 +491,25 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
   out.pixelFromWorld = cam.pixelFromCamera * cam.cameraFromWorld;
   const dmat4& pixelFromWorld = out.pixelFromWorld;
   const size_t vertexChunks = (nv + kChunkTriangles - 1) / kChunkTriangles;
-  parallelFor(0, vertexChunks, threads, [&](size_t c) {
+  constexpr size_t kMeshesPerItem = 512;
+  const size_t meshItems = (meshCount + kMeshesPerItem - 1) / kMeshesPerItem;
+  parallelFor(0, vertexChunks + meshItems, threads, [&](size_t c) {
+    if (c >= vertexChunks) {
+      const size_t first = (c - vertexChunks) * kMeshesPerItem, last = std::min(meshCount, first + kMeshesPerItem);
+      for (size_t m = first; m < last; ++m) out.meshCulled[m] = meshOutside(scene.meshes[m]);
+      return;
+    }
     const size_t first = c * kChunkTriangles, count = std::min(nv, first + kChunkTriangles) - first;
     transformVertices(scene.positions.data() + first, count, pixelFromWorld, cam, out.outcodes.data() + first,
                       out.projected.data() + first);
   });
+  out.faceVisible.clear();
+  for (size_t m = 0; m < meshCount; ++m) {
+    if (!out.meshCulled[m]) continue;
+    const MeshRange& mesh = scene.meshes[m];
+    if (out.faceVisible.empty()) out.faceVisible.assign(scene.faceCount(), 1);
+    std::fill(out.faceVisible.begin() + mesh.firstFace, out.faceVisible.begin() + mesh.firstFace + mesh.faceCount, 0);
+  }
 
   // Triangles in fixed chunks, each into its own list (read in chunk order, they are the
   // submission order), each handed to the consumer by the worker that set it up.

@@ -217,6 +217,7 @@ struct FrontEndOutput : FrontEndCounters {
   // Per face, 0 when its mesh's box lies wholly outside a clipping plane; empty when no mesh
   // is (the usual case: no 1-byte-per-face pass over memory each frame).
   std::vector<uint8_t> faceVisible;
+  std::vector<uint8_t> meshCulled;  // per mesh, 1 when its box lies wholly outside a clipping plane
   /// Whether face `face`'s mesh was not culled whole (see faceVisible).
   bool meshInView(uint32_t face) const { return faceVisible.empty() || faceVisible[face]; }
 };
