@@ -466,21 +466,31 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
   const int threads = resolveThreads(options.threads);
 
   // Object-level view culling: a mesh whose bounding box lies wholly outside one clipping plane
-  // is skipped without touching its triangles. Its eight corners are tested on the workers, a
-  // run of meshes per item beside the vertex pass's items (the city has 3601 meshes: as many
-  // corners as vertices); faceVisible stays empty unless a mesh is culled: then a byte per face.
+  // is skipped without touching its triangles. Its eight corners go through the vertex pass's
+  // SIMD transform (the same matrix as its vertices), a run of meshes per item beside the vertex
+  // pass's items (the city has 3601 meshes: as many corners as vertices); faceVisible stays
+  // empty unless a mesh is culled: then a byte per face.
   const size_t meshCount = scene.meshes.size();
   out.meshCulled.resize(meshCount);
-  auto meshOutside = [&](const MeshRange& mesh) {
-    const Bounds3& b = mesh.bounds;  // computed once, by Scene::finalize()
-    if (b.empty()) return false;
-    uint32_t all = (1u << kPlanes) - 1;
-    for (int c = 0; c < 8; ++c) {
-      dvec3 p{c & 1 ? b.hi.x : b.lo.x, c & 2 ? b.hi.y : b.lo.y, c & 4 ? b.hi.z : b.lo.z};
-      dvec4 h = cam.toPixelH(p);
-      all &= clipOutcode({h.x, h.y, h.z, h.w}, cam);
+  auto testMeshes = [&](size_t first, size_t last) {  // meshCulled[first, last)
+    constexpr size_t kGroup = 32;  // meshes whose corners are transformed together
+    dvec3 corners[8 * kGroup];
+    uint8_t codes[8 * kGroup];
+    ProjectedVertex projected[8 * kGroup];  // (not used)
+    for (size_t g = first; g < last; g += kGroup) {
+      const size_t n = std::min(last - g, kGroup);
+      for (size_t m = 0; m < n; ++m) {
+        const Bounds3& b = scene.meshes[g + m].bounds;  // computed once, by Scene::finalize()
+        for (int c = 0; c < 8; ++c)
+          corners[8 * m + c] = {c & 1 ? b.hi.x : b.lo.x, c & 2 ? b.hi.y : b.lo.y, c & 4 ? b.hi.z : b.lo.z};
+      }
+      transformVertices(corners, 8 * n, out.pixelFromWorld, cam, codes, projected);
+      for (size_t m = 0; m < n; ++m) {
+        uint8_t all = codes[8 * m];
+        for (int c = 1; c < 8; ++c) all &= codes[8 * m + c];
+        out.meshCulled[g + m] = !scene.meshes[g + m].bounds.empty() && all != 0;
+      }
     }
-    return all != 0;
   };
 
   // Every vertex once, in double, straight from world to homogeneous pixel coordinates; those
@@ -496,7 +506,7 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
   parallelFor(0, vertexChunks + meshItems, threads, [&](size_t c) {
     if (c >= vertexChunks) {
       const size_t first = (c - vertexChunks) * kMeshesPerItem, last = std::min(meshCount, first + kMeshesPerItem);
-      for (size_t m = first; m < last; ++m) out.meshCulled[m] = meshOutside(scene.meshes[m]);
+      testMeshes(first, last);
       return;
     }
     const size_t first = c * kChunkTriangles, count = std::min(nv, first + kChunkTriangles) - first;
