@@ -465,6 +465,14 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
   static_cast<FrontEndCounters&>(out) = FrontEndCounters{};
   const int threads = resolveThreads(options.threads);
 
+  // Every vertex once, in double, straight from world to homogeneous pixel coordinates; those
+  // inside the clip volume are projected and snapped here, shared by all their triangles.
+  const size_t nv = scene.positions.size();
+  out.outcodes.resize(nv);
+  out.projected.resize(nv);
+  out.pixelFromWorld = cam.pixelFromCamera * cam.cameraFromWorld;
+  const dmat4& pixelFromWorld = out.pixelFromWorld;
+
   // Object-level view culling: a mesh whose bounding box lies wholly outside one clipping plane
   // is skipped without touching its triangles. Its eight corners go through the vertex pass's
   // SIMD transform (the same matrix as its vertices), a run of meshes per item beside the vertex
@@ -484,7 +492,7 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
         for (int c = 0; c < 8; ++c)
           corners[8 * m + c] = {c & 1 ? b.hi.x : b.lo.x, c & 2 ? b.hi.y : b.lo.y, c & 4 ? b.hi.z : b.lo.z};
       }
-      transformVertices(corners, 8 * n, out.pixelFromWorld, cam, codes, projected);
+      transformVertices(corners, 8 * n, pixelFromWorld, cam, codes, projected);
       for (size_t m = 0; m < n; ++m) {
         uint8_t all = codes[8 * m];
         for (int c = 1; c < 8; ++c) all &= codes[8 * m + c];
@@ -493,13 +501,7 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
     }
   };
 
-  // Every vertex once, in double, straight from world to homogeneous pixel coordinates; those
-  // inside the clip volume are projected and snapped here, shared by all their triangles.
-  const size_t nv = scene.positions.size();
-  out.outcodes.resize(nv);
-  out.projected.resize(nv);
-  out.pixelFromWorld = cam.pixelFromCamera * cam.cameraFromWorld;
-  const dmat4& pixelFromWorld = out.pixelFromWorld;
+  // The vertex pass's chunks, then the mesh tests' runs, as items of one parallel loop.
   const size_t vertexChunks = (nv + kChunkTriangles - 1) / kChunkTriangles;
   constexpr size_t kMeshesPerItem = 512;
   const size_t meshItems = (meshCount + kMeshesPerItem - 1) / kMeshesPerItem;
