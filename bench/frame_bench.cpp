@@ -102,12 +102,12 @@ void BM_RasterTiles(benchmark::State& state) {
   state.counters["blocks_full"] = double(counters.blocksFull);
   state.counters["blocks_partial"] = double(counters.blocksPartial);
   state.counters["blocks_culled"] = double(counters.blocksCulled);
-  state.counters["rows_culled"] = double(counters.rowsCulled);
+  state.counters["pixels_culled"] = double(counters.pixelsCulled);
   state.counters["tiles_whole"] = double(counters.tilesWhole);
   state.counters["blocks_whole"] = double(counters.blocksWhole);
 }
 BENCHMARK(BM_RasterTiles)
-    ->ArgsProduct({{0, 1, 3, 4}, benchmark::CreateDenseRange(0, 15, 1)})
+    ->ArgsProduct({{0, 1, 2, 3, 4}, benchmark::CreateDenseRange(0, 15, 1)})
     ->Unit(benchmark::kMillisecond);
 
 // Whole frames through render(): scene range(0), raster range(1) (0 tiled, 1 halfspace),

@@ -109,13 +109,13 @@ HWY_INLINE V StoredDepth(const MappedPlanes& m, V X, double Y) {
 }
 
 // StoredDepth with a X of both planes given (pX = m.p.a X, qX = m.q.a X, as StoredDepth computes
-// them) and b Y broadcast (pY, qY): the same bits.
+// them) and P's b Y broadcast (pY): the same bits.
 template <DepthStorage S>
-HWY_INLINE V StoredDepthAt(const MappedPlanes& m, V pX, V pY, V qX, V qY) {
+HWY_INLINE V StoredDepthAt(const MappedPlanes& m, V pX, V pY, V qX, double Y) {
   const D d;
   const V p = hn::Add(hn::Add(pX, pY), hn::Set(d, m.p.c));
   if (m.affine) return Quantize<S>(Clamp01(p));  // q = 1: p / q is p
-  const V q = hn::Add(hn::Add(qX, qY), hn::Set(d, m.q.c));
+  const V q = hn::Add(hn::Add(qX, hn::Set(d, m.q.b * Y)), hn::Set(d, m.q.c));
   return Quantize<S>(Clamp01(hn::Div(p, q)));
 }
 
@@ -307,6 +307,10 @@ void RasterizeTileT(const TileJob& job) {
   TileScratch& s = *job.scratch;
   RasterCounters count;  // added to the job's at the end
   uint64_t tests = 0, writes = 0;  // the hottest counts, plain locals so they stay in registers
+  // The row loop's counts, per lane (summed at the end): a masked add per row instead of
+  // popcounts. covered: pixels of the triangle visited there, tested or not.
+  hn::Vec<DU> rowTests = hn::Zero(du), rowWrites = hn::Zero(du), rowCovered = hn::Zero(du);
+  const hn::Vec<DU> oneU = hn::Set(du, 1);
   const Bins& bins = *job.bins;
   const TileFrame tf = MakeTileFrame<S, M>(job);
   const int x0 = tf.x0, y0 = tf.y0, w = tf.w, h = tf.h;
@@ -625,11 +629,16 @@ void RasterizeTileT(const TileJob& job) {
             }
         }
         // The block's farthest value after this triangle, gathered from the rows it visits.
-        V far = nearestV, nearestWritten = farthestV;
-        V wroteMask = hn::Zero(d);
-        for (int y = cy0; y <= cy1; ++y) {
-          const double Y = double(y0 + y) + 0.5;
-          const V pY = hn::Set(d, m.p.b * Y), qY = hn::Set(d, m.q.b * Y);
+        // The nearest value of the rows' in-image columns, per vector of a row (a lane is one
+        // column): the nearest written, or a stored value no nearer than blockNear (a bound of
+        // every value stored in the block's image part), so it moves blockNear as the nearest
+        // written would. (Columns outside the image hold the nearest possible value.)
+        V far = nearestV, nearest[kVectors];
+        for (V& v : nearest) v = farthestV;
+        Mask wrote = hn::FirstN(d, 0);
+        double Y = double(y0 + cy0) + 0.5;  // the row's centre, stepped (exact: integers + 0.5)
+        for (int y = cy0; y <= cy1; ++y, Y += 1.0) {
+          const V pY = hn::Set(d, m.p.b * Y);
           for (size_t k = 0; k < size_t(kBlockSize); k += N) {
             const size_t at = size_t(y) * kTileSize + size_t(bxPixel) + k;
             const V stored = hn::Load(d, s.depth + at);
@@ -645,7 +654,7 @@ void RasterizeTileT(const TileJob& job) {
             // way: a mispredicted branch costs more than the division it would save.
             const Mask maybe = hn::And(cover, kIds ? NotFarther<kGreater>(qNearV, stored) : Nearer<kGreater>(qNearV, stored));
             // Pixel centres X = x + 0.5; depth = P(X, Y) / Q(X, Y) (raster/fragment_depth.hpp).
-            const V z = constantDepth ? zConstant : StoredDepthAt<S>(m, pX[k / N], pY, qX[k / N], qY);
+            const V z = constantDepth ? zConstant : StoredDepthAt<S>(m, pX[k / N], pY, qX[k / N], Y);
             Mask win = hn::And(maybe, Nearer<kGreater>(z, stored));
             if constexpr (kIds) {  // a tie goes to the triangle submitted first
               const auto old = hn::Load(du, s.triangle + at);
@@ -653,18 +662,18 @@ void RasterizeTileT(const TileJob& job) {
               win = hn::Or(win, hn::And(maybe, tie));
               hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
             }
-            const size_t tested = hn::CountTrue(d, maybe);
-            tests += tested;
-            writes += hn::CountTrue(d, win);
+            rowTests = hn::IfThenElse(hn::RebindMask(du, maybe), hn::Add(rowTests, oneU), rowTests);
+            rowWrites = hn::IfThenElse(hn::RebindMask(du, win), hn::Add(rowWrites, oneU), rowWrites);
+            if constexpr (kCountBlocks)
+              rowCovered = hn::IfThenElse(hn::RebindMask(du, cover), hn::Add(rowCovered, oneU), rowCovered);
             result = hn::IfThenElse(win, z, stored);
             hn::Store(result, d, s.depth + at);
-            nearestWritten = NearerOf<kGreater>(nearestWritten, hn::IfThenElse(win, z, farthestV));
-            wroteMask = hn::Or(wroteMask, hn::VecFromMask(d, win));
-            if constexpr (kCountBlocks) count.rowsCulled += tested == 0 && !hn::AllFalse(d, cover);
+            nearest[k / N] = NearerOf<kGreater>(nearest[k / N], result);
+            wrote = hn::Or(wrote, win);
             far = Farther<kGreater>(far, result);
           }
         }
-        if (!hn::AllFalse(d, hn::MaskFromVec(wroteMask))) {
+        if (!hn::AllFalse(d, wrote)) {
           // The block's rows outside the triangle's box kept their values.
           for (int y = by * kBlockSize; y < (by + 1) * kBlockSize; ++y) {
             if (y == cy0) y = cy1 + 1;
@@ -675,7 +684,12 @@ void RasterizeTileT(const TileJob& job) {
           // The tile's farthest value can only move when the block that held it moved.
           s.tileFarStale |= s.blockFar[b] == s.tileFar;
           s.blockFar[b] = FarthestLane<kGreater>(far);
-          const double written = NearestLane<kGreater>(nearestWritten);
+          V near = farthestV;
+          for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+            const Mask inImage = hn::Lt(hn::Add(lane, hn::Set(d, double(bxPixel + int(k)))), hn::Set(d, double(w)));
+            near = NearerOf<kGreater>(near, hn::IfThenElse(inImage, nearest[k / N], farthestV));
+          }
+          const double written = NearestLane<kGreater>(near);
           if (storedNearer<M>(written, s.blockNear[b])) s.blockNear[b] = written;
           if (storedNearer<M>(written, s.tileNear)) s.tileNear = written;
         }
@@ -687,8 +701,10 @@ void RasterizeTileT(const TileJob& job) {
     if (dirtyBlocks) refreshDirty();
     if (s.tileFarStale) refreshTileFar();
   }
-  count.depthTests = tests;
-  count.depthWrites = writes;
+  const uint64_t testedInRows = hn::GetLane(hn::SumOfLanes(du, rowTests));
+  count.depthTests = tests + testedInRows;
+  count.depthWrites = writes + hn::GetLane(hn::SumOfLanes(du, rowWrites));
+  if constexpr (kCountBlocks) count.pixelsCulled = hn::GetLane(hn::SumOfLanes(du, rowCovered)) - testedInRows;
   job.counters->add(count);
 }
 

@@ -92,7 +92,7 @@ void RasterCounters::add(const RasterCounters& o) {
   blocksPartial += o.blocksPartial;
   blocksFull += o.blocksFull;
   blocksCulled += o.blocksCulled;
-  rowsCulled += o.rowsCulled;
+  pixelsCulled += o.pixelsCulled;
   tilesWhole += o.tilesWhole;
   blocksWhole += o.blocksWhole;
 }
