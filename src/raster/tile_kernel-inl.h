@@ -81,7 +81,14 @@ HWY_INLINE bool Beaten(double nearest, double stored) {
 HWY_INLINE V Clamp01(V v) {
   const D d;
   const V zero = hn::Zero(d), one = hn::Set(d, 1.0);
+#if HWY_ARCH_X86 && HWY_TARGET != HWY_EMU128 && HWY_TARGET != HWY_SCALAR
+  // x86's max(a, b) is a > b ? a : b and min(a, b) a < b ? a : b (the second operand when one
+  // is NaN or both are zeros): max(0, v) is v < 0 ? 0 : v, keeping NaN and -0, then min(1, .)
+  // is 1 < . ? 1 : . -- the same lanes as the compares below, in two instructions, not four.
+  return hn::Min(one, hn::Max(zero, v));
+#else
   return hn::IfThenElse(hn::Lt(v, zero), zero, hn::IfThenElse(hn::Lt(one, v), one, v));
+#endif
 }
 
 // quantizeDepth<S> lane by lane, kept as a double (exact for every storage): float rounding, or
