@@ -76,7 +76,7 @@ void BM_Bin(benchmark::State& state) {
   state.SetLabel(kScenes[state.range(0)]);
   state.counters["entries"] = double(entries);
 }
-BENCHMARK(BM_Bin)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Bin)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 // The tile pass alone (no resolve), one thread, for scene range(0) and format range(1).
 void BM_RasterTiles(benchmark::State& state) {

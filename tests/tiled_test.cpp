@@ -16,8 +16,10 @@
 #include <hwy/targets.h>
 #include <memory>
 #include <random>
+#include <random>
 #include <set>
 
+#include "raster/edge.hpp"
 #include "raster/fragment_depth.hpp"
 #include "raster/halfspace.hpp"
 #include "raster/tiled.hpp"
@@ -906,3 +908,47 @@ TEST(Tiled, RejectsTrianglesBehindATilesFarthestDepth) {
 
 }  // namespace
 }  // namespace hsr
+
+// Binning narrows each row of tiles to an edge by solving E >= bias for the column (edge.hpp,
+// narrowTilesToEdge): the same tiles as testing the corner where E is largest tile by tile, on
+// random edges, boxes and starting intervals (steep, flat, horizontal and vertical edges, both
+// biases, exact boundaries included by the small slopes).
+TEST(Tiled, TilesNarrowedToAnEdgeAreThoseWhoseLargestCornerIsInside) {
+  std::mt19937_64 random(7);
+  constexpr int kTile = 64;
+  size_t partial = 0;
+  for (int it = 0; it < 300000; ++it) {
+    const int span = random() % 4 == 0 ? 100000 : 3000;
+    const int minX = int(random() % uint64_t(span)), maxX = minX + int(random() % uint64_t(span));
+    const int y0 = int(random() % uint64_t(span)), y1 = y0 + int(random() % kTile);
+    auto coordinate = [&] { return int64_t(random() % uint64_t(span * 256)) - span * 80; };
+    hsr::Edge e{int64_t(random() % 2000001) - 1000000, int64_t(random() % 2000001) - 1000000, coordinate(), coordinate(), 0};
+    if (random() % 8 == 0) e.dy = 0;
+    if (random() % 8 == 0) e.dx = 0;
+    if (random() % 4 == 0) {
+      e.dx %= 300;
+      e.dy %= 300;
+    }
+    e.bias = int64_t(random() % 2);
+    int first = minX / kTile, last = maxX / kTile;
+    if (random() % 3 == 0) {
+      first += int(random() % 3);
+      last -= int(random() % 3);
+      first = std::min(first, last + 1);
+    }
+    std::vector<int> expected;
+    for (int tx = first; tx <= last; ++tx) {
+      const int x = e.dy < 0 ? std::min(tx * kTile + kTile - 1, maxX) : std::max(tx * kTile, minX);
+      if (e.at(hsr::centerFixed(x), hsr::centerFixed(e.dx > 0 ? y1 : y0)) >= e.bias) expected.push_back(tx);
+    }
+    const int before[2] = {first, last};
+    hsr::narrowTilesToEdge(e, kTile, minX, maxX, y0, y1, first, last);
+    ASSERT_LE(first, last + 1);
+    std::vector<int> got;
+    for (int tx = first; tx <= last; ++tx) got.push_back(tx);
+    ASSERT_EQ(got, expected) << "edge dx " << e.dx << " dy " << e.dy << " a (" << e.ax << ", " << e.ay << ") bias "
+                             << e.bias << ", box x " << minX << ".." << maxX << " y " << y0 << ".." << y1;
+    partial += !expected.empty() && (expected.front() != before[0] || expected.back() != before[1]);
+  }
+  EXPECT_GT(partial, 10000u);  // the cases exercised include intervals cut on either side
+}

@@ -8,6 +8,9 @@
 // (dy < 0). A centre exactly on an edge is inside only for top and left edges, so two triangles
 // sharing an edge never both cover a pixel and never both miss it.
 #pragma once
+#include <algorithm>
+#include <cstdint>
+
 #include "frontend/frontend.hpp"
 
 namespace hsr {
@@ -32,5 +35,27 @@ inline Edge makeEdge(const SetupTriangle& t, int i) {
 
 /// Fixed-point position of pixel (x, y)'s centre.
 inline int64_t centerFixed(int i) { return int64_t(i) * kSubpixelOne + kSubpixelOne / 2; }
+
+/// Narrows [first, last], tiles (of tileSize pixels) of one row of tiles whose pixel rows y0..y1
+/// of the box [minX, maxX] they cover (first <= last + 1 on entry and exit), to the tiles where
+/// `edge` is not wholly outside the tile's part of the box: E at the corner where it is largest
+/// (E grows with x when dy < 0, with y when dx > 0) is inside. Along the row E at pixel column x
+/// is R + k x with k = -dy S (S = kSubpixelOne), so the columns inside are x >= ceil((bias - R) /
+/// k) when k > 0 and x <= floor((R - bias) / -k) when k < 0: exact integer arithmetic (E is below
+/// 2^49), no search over the tiles.
+inline void narrowTilesToEdge(const Edge& edge, int tileSize, int minX, int maxX, int y0, int y1, int& first, int& last) {
+  const int64_t R = edge.dx * (centerFixed(edge.dx > 0 ? y1 : y0) - edge.ay) - edge.dy * (kSubpixelOne / 2 - edge.ax);
+  if (edge.dy < 0) {  // a tile passes when its rightmost column in the box is inside
+    const int64_t xMin = ceilDiv(edge.bias - R, -edge.dy * kSubpixelOne);
+    const int64_t firstTile = maxX < xMin ? int64_t(last) + 1 : ceilDiv(xMin - (tileSize - 1), tileSize);
+    first = int(std::clamp<int64_t>(firstTile, first, int64_t(last) + 1));
+  } else if (edge.dy > 0) {  // its leftmost
+    const int64_t xMax = floorDiv(R - edge.bias, edge.dy * kSubpixelOne);
+    const int64_t lastTile = minX > xMax ? int64_t(first) - 1 : floorDiv(xMax, tileSize);
+    last = int(std::clamp<int64_t>(lastTile, int64_t(first) - 1, last));
+  } else if (R < edge.bias) {  // horizontal: the same for every tile
+    last = first - 1;
+  }
+}
 
 }  // namespace hsr

@@ -135,8 +135,8 @@ HWY_INLINE std::pair<int, int> passingTiles(const Edge (&e)[3], int lo, int hi, 
 // Appends (tile << 32 | index) for each tile triangle `index` may cover: the tiles its box
 // overlaps, less those that one edge excludes (all four corner pixel centres of the box's part
 // outside: the edge function is linear, so it is enough that the corner where it is largest is).
-// Along a row of tiles that corner moves monotonically, so the row's tiles are found by
-// passingTiles. With kCull (binChunk's cull), tiles whose covering bound in `cover` is strictly
+// Along a row of tiles that corner moves monotonically, so the row's tiles are an interval
+// (narrowTilesToEdge, raster/edge.hpp). With kCull (binChunk's cull), tiles whose covering bound in `cover` is strictly
 // nearer than `nearest` (in the direction `greater`) are left out and counted in `culled`.
 template <bool kCull>
 HWY_INLINE void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector<uint64_t>& pairs,
@@ -158,13 +158,8 @@ HWY_INLINE void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, 
   const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
   for (int ty = ty0; ty <= ty1; ++ty) {
     const int y0 = std::max<int>(ty * kTileSize, t.minY), y1 = std::min<int>(ty * kTileSize + kTileSize - 1, t.maxY);
-    // The edge is not wholly outside the tile's part of the box: E at the corner where it is
-    // largest (E grows with x when -dy > 0, with y when dx > 0).
-    auto passes = [&](const Edge& edge, int tx) {
-      const int x = edge.dy < 0 ? std::min<int>(tx * kTileSize + kTileSize - 1, t.maxX) : std::max<int>(tx * kTileSize, t.minX);
-      return edge.at(centerFixed(x), centerFixed(edge.dx > 0 ? y1 : y0)) >= edge.bias;
-    };
-    const auto [first, last] = passingTiles(e, tx0, tx1, passes);
+    int first = tx0, last = tx1;
+    for (const Edge& edge : e) narrowTilesToEdge(edge, kTileSize, t.minX, t.maxX, y0, y1, first, last);
     const uint64_t rowKey = uint64_t(ty * tilesX) << 32 | index;
     for (int tx = first; tx <= last; ++tx)
       if (!hidden(ty * tilesX + tx)) pairs.push_back(rowKey + (uint64_t(tx) << 32));
