@@ -909,15 +909,17 @@ TEST(Tiled, RejectsTrianglesBehindATilesFarthestDepth) {
 }  // namespace
 }  // namespace hsr
 
-// Binning narrows each row of tiles to an edge by solving E >= bias for the column (edge.hpp,
-// narrowTilesToEdge): the same tiles as testing the corner where E is largest tile by tile, on
-// random edges, boxes and starting intervals (steep, flat, horizontal and vertical edges, both
-// biases, exact boundaries included by the small slopes).
-TEST(Tiled, TilesNarrowedToAnEdgeAreThoseWhoseLargestCornerIsInside) {
+// Binning and the tiles' cover bounds narrow each row of tiles to an edge by solving E >= bias
+// for the column (edge.hpp, narrowTilesToEdge): the same tiles as testing, tile by tile, the
+// corner where E is largest (binning) or smallest (tiles wholly inside), on random edges, boxes
+// and starting intervals (steep, flat, horizontal and vertical edges, both biases, exact
+// boundaries included by the small slopes).
+TEST(Tiled, TilesNarrowedToAnEdgeAreThoseWhoseLargestOrSmallestCornerIsInside) {
   std::mt19937_64 random(7);
   constexpr int kTile = 64;
-  size_t partial = 0;
-  for (int it = 0; it < 300000; ++it) {
+  size_t partial[2] = {0, 0};
+  for (int it = 0; it < 600000; ++it) {
+    const bool whole = it % 2;
     const int span = random() % 4 == 0 ? 100000 : 3000;
     const int minX = int(random() % uint64_t(span)), maxX = minX + int(random() % uint64_t(span));
     const int y0 = int(random() % uint64_t(span)), y1 = y0 + int(random() % kTile);
@@ -938,17 +940,20 @@ TEST(Tiled, TilesNarrowedToAnEdgeAreThoseWhoseLargestCornerIsInside) {
     }
     std::vector<int> expected;
     for (int tx = first; tx <= last; ++tx) {
-      const int x = e.dy < 0 ? std::min(tx * kTile + kTile - 1, maxX) : std::max(tx * kTile, minX);
-      if (e.at(hsr::centerFixed(x), hsr::centerFixed(e.dx > 0 ? y1 : y0)) >= e.bias) expected.push_back(tx);
+      const int left = std::max(tx * kTile, minX), right = std::min(tx * kTile + kTile - 1, maxX);
+      const int x = (e.dy < 0) != whole ? right : left;
+      const int y = (e.dx > 0) != whole ? y1 : y0;
+      if (e.at(hsr::centerFixed(x), hsr::centerFixed(y)) >= e.bias) expected.push_back(tx);
     }
     const int before[2] = {first, last};
-    hsr::narrowTilesToEdge(e, kTile, minX, maxX, y0, y1, first, last);
+    hsr::narrowTilesToEdge(e, whole, kTile, minX, maxX, y0, y1, first, last);
     ASSERT_LE(first, last + 1);
     std::vector<int> got;
     for (int tx = first; tx <= last; ++tx) got.push_back(tx);
     ASSERT_EQ(got, expected) << "edge dx " << e.dx << " dy " << e.dy << " a (" << e.ax << ", " << e.ay << ") bias "
-                             << e.bias << ", box x " << minX << ".." << maxX << " y " << y0 << ".." << y1;
-    partial += !expected.empty() && (expected.front() != before[0] || expected.back() != before[1]);
+                             << e.bias << (whole ? ", whole" : "") << ", box x " << minX << ".." << maxX << " y " << y0 << ".." << y1;
+    partial[whole] += !expected.empty() && (expected.front() != before[0] || expected.back() != before[1]);
   }
-  EXPECT_GT(partial, 10000u);  // the cases exercised include intervals cut on either side
+  EXPECT_GT(partial[0], 10000u);
+  EXPECT_GT(partial[1], 10000u);  // the cases exercised include intervals cut on either side
 }

@@ -36,22 +36,31 @@ inline Edge makeEdge(const SetupTriangle& t, int i) {
 /// Fixed-point position of pixel (x, y)'s centre.
 inline int64_t centerFixed(int i) { return int64_t(i) * kSubpixelOne + kSubpixelOne / 2; }
 
-/// Narrows [first, last], tiles (of tileSize pixels) of one row of tiles whose pixel rows y0..y1
-/// of the box [minX, maxX] they cover (first <= last + 1 on entry and exit), to the tiles where
-/// `edge` is not wholly outside the tile's part of the box: E at the corner where it is largest
-/// (E grows with x when dy < 0, with y when dx > 0) is inside. Along the row E at pixel column x
-/// is R + k x with k = -dy S (S = kSubpixelOne), so the columns inside are x >= ceil((bias - R) /
-/// k) when k > 0 and x <= floor((R - bias) / -k) when k < 0: exact integer arithmetic (E is below
-/// 2^49), no search over the tiles.
-inline void narrowTilesToEdge(const Edge& edge, int tileSize, int minX, int maxX, int y0, int y1, int& first, int& last) {
-  const int64_t R = edge.dx * (centerFixed(edge.dx > 0 ? y1 : y0) - edge.ay) - edge.dy * (kSubpixelOne / 2 - edge.ax);
-  if (edge.dy < 0) {  // a tile passes when its rightmost column in the box is inside
+/// Narrows [first, last] (first <= last + 1 on entry and exit), tiles of tileSize pixels in one
+/// row of tiles, to those where `edge` passes on the tile's part of the pixel rows y0..y1 and
+/// columns [minX, maxX] (tile tx spans columns max(tx T, minX) .. min(tx T + T - 1, maxX)):
+/// with `whole` false, where it is not wholly outside (the corner where E is largest is inside);
+/// with `whole` true, where every pixel centre is inside (the corner where it is smallest). E
+/// grows with x when dy < 0 and with y when dx > 0. Along the row E at pixel column x is R + k x
+/// with k = -dy S (S = kSubpixelOne), so the columns inside are x >= ceil((bias - R) / k) when
+/// k > 0 and x <= floor((R - bias) / -k) when k < 0: exact integer arithmetic (E is below 2^49),
+/// no search over the tiles.
+inline void narrowTilesToEdge(const Edge& edge, bool whole, int tileSize, int minX, int maxX, int y0, int y1,
+                              int& first, int& last) {
+  const bool lowerRow = (edge.dx > 0) != whole;  // the row where E is largest (or smallest, whole)
+  const int64_t R = edge.dx * (centerFixed(lowerRow ? y1 : y0) - edge.ay) - edge.dy * (kSubpixelOne / 2 - edge.ax);
+  const int64_t T = tileSize;
+  if (edge.dy < 0) {  // inside from column xMin on: the tile's rightmost column (or leftmost, whole) must be
     const int64_t xMin = ceilDiv(edge.bias - R, -edge.dy * kSubpixelOne);
-    const int64_t firstTile = maxX < xMin ? int64_t(last) + 1 : ceilDiv(xMin - (tileSize - 1), tileSize);
+    int64_t firstTile;
+    if (!whole) firstTile = maxX < xMin ? int64_t(last) + 1 : ceilDiv(xMin - (T - 1), T);
+    else firstTile = minX >= xMin ? int64_t(first) : ceilDiv(xMin, T);
     first = int(std::clamp<int64_t>(firstTile, first, int64_t(last) + 1));
-  } else if (edge.dy > 0) {  // its leftmost
+  } else if (edge.dy > 0) {  // inside up to column xMax: the tile's leftmost column (or rightmost, whole) must be
     const int64_t xMax = floorDiv(R - edge.bias, edge.dy * kSubpixelOne);
-    const int64_t lastTile = minX > xMax ? int64_t(first) - 1 : floorDiv(xMax, tileSize);
+    int64_t lastTile;
+    if (!whole) lastTile = minX > xMax ? int64_t(first) - 1 : floorDiv(xMax, T);
+    else lastTile = maxX <= xMax ? int64_t(last) : floorDiv(xMax - (T - 1), T);
     last = int(std::clamp<int64_t>(lastTile, int64_t(first) - 1, last));
   } else if (R < edge.bias) {  // horizontal: the same for every tile
     last = first - 1;

@@ -99,39 +99,6 @@ void RasterCounters::add(const RasterCounters& o) {
 
 namespace {
 
-// The tiles [first, last] of [lo, hi] (one row) where every edge passes `passes(edge, tx)`, a
-// test at one corner of the tile that moves monotonically along the row, so that each edge's
-// test is monotone in tx: non-decreasing when the edge function grows with x (dy < 0),
-// non-increasing when it falls (dy > 0), constant when dy == 0. A binary search per edge; the
-// interval is empty (first > last) when no tile passes.
-template <class Passes>
-HWY_INLINE std::pair<int, int> passingTiles(const Edge (&e)[3], int lo, int hi, Passes&& passes) {
-  int first = lo, last = hi;
-  for (const Edge& edge : e) {
-    if (first > last) break;
-    if (edge.dy < 0) {  // the first passing tile
-      int a = first, b = last + 1;
-      while (a < b) {
-        const int m = (a + b) / 2;
-        if (passes(edge, m)) b = m;
-        else a = m + 1;
-      }
-      first = a;
-    } else if (edge.dy > 0) {  // the last passing tile
-      int a = first - 1, b = last;
-      while (a < b) {
-        const int m = (a + b + 1) / 2;
-        if (passes(edge, m)) a = m;
-        else b = m - 1;
-      }
-      last = a;
-    } else if (!passes(edge, first)) {
-      last = first - 1;
-    }
-  }
-  return {first, last};
-}
-
 // Appends (tile << 32 | index) for each tile triangle `index` may cover: the tiles its box
 // overlaps, less those that one edge excludes (all four corner pixel centres of the box's part
 // outside: the edge function is linear, so it is enough that the corner where it is largest is).
@@ -159,7 +126,7 @@ HWY_INLINE void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, 
   for (int ty = ty0; ty <= ty1; ++ty) {
     const int y0 = std::max<int>(ty * kTileSize, t.minY), y1 = std::min<int>(ty * kTileSize + kTileSize - 1, t.maxY);
     int first = tx0, last = tx1;
-    for (const Edge& edge : e) narrowTilesToEdge(edge, kTileSize, t.minX, t.maxX, y0, y1, first, last);
+    for (const Edge& edge : e) narrowTilesToEdge(edge, false, kTileSize, t.minX, t.maxX, y0, y1, first, last);
     const uint64_t rowKey = uint64_t(ty * tilesX) << 32 | index;
     for (int tx = first; tx <= last; ++tx)
       if (!hidden(ty * tilesX + tx)) pairs.push_back(rowKey + (uint64_t(tx) << 32));
@@ -185,14 +152,11 @@ bool coverBounds(const SetupTriangles& tris, const DepthSetup& depth, int width,
       const int y0 = ty * kTileSize, y1 = std::min(y0 + kTileSize, height) - 1;
       if (y1 > t.maxY) break;
       // The tiles of the row inside the box, whose every pixel centre in the image is inside
-      // the edge: E at the corner where it is smallest.
-      auto passes = [&](const Edge& edge, int tx) {
-        const int x = edge.dy < 0 ? tx * kTileSize : std::min(tx * kTileSize + kTileSize, width) - 1;
-        return edge.at(centerFixed(x), centerFixed(edge.dx > 0 ? y0 : y1)) >= edge.bias;
-      };
+      // the edges (a tile spans columns tx T .. min(tx T + T - 1, width - 1)).
       int lastInBox = t.maxX / kTileSize;
       if (std::min(lastInBox * kTileSize + kTileSize, width) - 1 > t.maxX) --lastInBox;
-      const auto [first, last] = passingTiles(e, (t.minX + kTileSize - 1) / kTileSize, lastInBox, passes);
+      int first = (t.minX + kTileSize - 1) / kTileSize, last = lastInBox;
+      for (const Edge& edge : e) narrowTilesToEdge(edge, true, kTileSize, 0, width - 1, y0, y1, first, last);
       if (first > last) continue;
       if (!farKnown) {
         double px[3], py[3];
