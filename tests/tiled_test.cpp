@@ -924,7 +924,8 @@ TEST(Tiled, TilesNarrowedToAnEdgeAreThoseWhoseLargestOrSmallestCornerIsInside) {
     const int minX = int(random() % uint64_t(span)), maxX = minX + int(random() % uint64_t(span));
     const int y0 = int(random() % uint64_t(span)), y1 = y0 + int(random() % kTile);
     auto coordinate = [&] { return int64_t(random() % uint64_t(span * 256)) - span * 80; };
-    hsr::Edge e{int64_t(random() % 2000001) - 1000000, int64_t(random() % 2000001) - 1000000, coordinate(), coordinate(), 0};
+    auto slope = [&] { return int64_t(random() % 2000001) - 1000000; };
+    hsr::Edge e{slope(), slope(), coordinate(), coordinate(), 0};
     if (random() % 8 == 0) e.dy = 0;
     if (random() % 8 == 0) e.dx = 0;
     if (random() % 4 == 0) {
@@ -951,7 +952,8 @@ TEST(Tiled, TilesNarrowedToAnEdgeAreThoseWhoseLargestOrSmallestCornerIsInside) {
     std::vector<int> got;
     for (int tx = first; tx <= last; ++tx) got.push_back(tx);
     ASSERT_EQ(got, expected) << "edge dx " << e.dx << " dy " << e.dy << " a (" << e.ax << ", " << e.ay << ") bias "
-                             << e.bias << (whole ? ", whole" : "") << ", box x " << minX << ".." << maxX << " y " << y0 << ".." << y1;
+                             << e.bias << (whole ? ", whole" : "") << ", box x " << minX << ".." << maxX << " y "
+                             << y0 << ".." << y1;
     partial[whole] += !expected.empty() && (expected.front() != before[0] || expected.back() != before[1]);
   }
   EXPECT_GT(partial[0], 10000u);

@@ -103,8 +103,9 @@ namespace {
 // overlaps, less those that one edge excludes (all four corner pixel centres of the box's part
 // outside: the edge function is linear, so it is enough that the corner where it is largest is).
 // Along a row of tiles that corner moves monotonically, so the row's tiles are an interval
-// (narrowTilesToEdge, raster/edge.hpp). With kCull (binChunk's cull), tiles whose covering bound in `cover` is strictly
-// nearer than `nearest` (in the direction `greater`) are left out and counted in `culled`.
+// (narrowTilesToEdge, raster/edge.hpp). With kCull (binChunk's cull), tiles whose covering bound
+// in `cover` is strictly nearer than `nearest` (in the direction `greater`) are left out and
+// counted in `culled`.
 template <bool kCull>
 HWY_INLINE void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector<uint64_t>& pairs,
                             const double* cover = nullptr, double nearest = 0, bool greater = false,
