@@ -52,6 +52,34 @@ TEST(Parallel, ManyJobsWithUnevenTasks) {
   }
 }
 
+// Jobs apart by less than the pool's spin time (a worker still spinning joins at once), by about
+// as much (a worker may see a job end before it joins), and by more (a worker asleep is woken):
+// every index still runs once, and a worker takes part after each kind of gap.
+TEST(Parallel, JobsAfterShortAndLongGaps) {
+  using namespace std::chrono;
+  constexpr size_t n = 64;
+  const bool workers = resolveThreads(0) >= 2;
+  for (auto gap : {microseconds(0), microseconds(30), kPoolSpin - microseconds(10), kPoolSpin + microseconds(10),
+                   10 * kPoolSpin}) {
+    bool workerTookPart = false;
+    for (int job = 0; job < 20; ++job) {
+      std::vector<std::atomic<int>> runs(n);
+      std::atomic<bool> other{false};
+      parallelFor(0, n, 2, [&](size_t i) {
+        const auto until = steady_clock::now() + microseconds(20);  // a task long enough to share
+        while (steady_clock::now() < until) {
+        }
+        if (currentPart() != 0) other = true;
+        runs[i].fetch_add(1);
+      });
+      for (size_t i = 0; i < n; ++i) ASSERT_EQ(runs[i].load(), 1) << "gap " << gap.count() << " us, job " << job;
+      workerTookPart |= other.load();
+      std::this_thread::sleep_for(gap);
+    }
+    if (workers) EXPECT_TRUE(workerTookPart) << "gap " << gap.count() << " us: the worker never joined";
+  }
+}
+
 TEST(Parallel, NestedCallRunsOnItsCaller) {
   std::vector<std::atomic<int>> runs(8 * 8);
   parallelFor(0, 8, 2, [&](size_t outer) {

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <hsr/hsr.hpp>
 
+#include "core/parallel.hpp"
 #include "gl_projection.hpp"
 #include "id_compare.hpp"
 #define GL_GLEXT_PROTOTYPES 1  // libOpenGL (GLVND) exports every OpenGL 4.5 core entry point
@@ -371,6 +372,9 @@ int run(Options& o) {
     auto renderAll = [&] { return timed([&] { hsr::render(scene, camera, allOptions, allFrame); }); };
     const bool hsrFirst = i % 2 == 0;
     const double firstMs = hsrFirst ? renderHsr() : renderAll();
+    // hsr's pool threads spin a while after a job (kPoolSpin) before they sleep: not into
+    // llvmpipe's time, where they would take a core from its threads.
+    std::this_thread::sleep_for(2 * hsr::kPoolSpin);
     const double glFrameMs = timed([&] { gl.drawFrame(hsrOptions.background); });
     const double secondMs = hsrFirst ? renderAll() : renderHsr();
     const double writeFrameMs = timed([&] { written.clear(hsrOptions.background, threads); });

@@ -4,6 +4,7 @@
 // on the thread count as long as each index writes only its own outputs.
 #pragma once
 #include <atomic>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -12,6 +13,11 @@
 #include <vector>
 
 namespace hsr {
+
+/// How long the pool's threads spin before they sleep: a worker between jobs, the caller of a job
+/// for its workers (core/parallel.cpp). A benchmark that times another renderer right after hsr
+/// waits this long first, so that no spinning worker takes a core from it.
+inline constexpr std::chrono::microseconds kPoolSpin{200};
 
 inline int resolveThreads(int requested) {
   if (requested > 0) return requested;
