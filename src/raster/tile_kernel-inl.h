@@ -780,10 +780,14 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
       V q;
       if (s.state == TileState::Plane) q = StoredDepth<S>(m, X, Y);
       else if (s.blockClear[b]) q = clearV;
-      else if (s.blockKey[b])
-        q = StoredDepth<S>(mapPlanes<M>(s.blockTriangle[b]->depthNum, s.blockTriangle[b]->depthDen, job.depth.near,
-                                        job.depth.far, job.depth.orthographic),
-                           X, Y);
+      else if (s.blockKey[b]) {
+        if (s.blockTriangle[b] != blockPlane) {  // mapped once per run of lanes of one triangle
+          blockPlane = s.blockTriangle[b];
+          blockM = mapPlanes<M>(blockPlane->depthNum, blockPlane->depthDen, job.depth.near, job.depth.far,
+                                job.depth.orthographic);
+        }
+        q = StoredDepth<S>(blockM, X, Y);
+      }
       else q = hn::Load(d, s.depth + size_t(y) * kTileSize + k);
       const Mask drawn = hn::And(hn::FirstN(d, count), hn::Ne(q, clearV));
       covered += hn::CountTrue(d, drawn);
