@@ -146,6 +146,28 @@ HWY_INLINE double NearestLane(V v) {
   return hn::GetLane(kGreater ? hn::MaxOfLanes(d, v) : hn::MinOfLanes(d, v));
 }
 
+// storedRangeOverRect (raster/fragment_depth.hpp) for an affine m (q = 1) lane by lane, over the
+// rectangles [left, right] (lanes) x [top, bottom], with the same operations: the same bits.
+// For planes whose error pErr (planeError, over the tile) is below 1e280 only: then |a| x + |b| y
+// + |c| is below 1e280 / 2^-49 < 2^1000 at every point of the tile, so p's bounds are finite
+// (storedRangeOverRect's "none" cannot occur; q = 1 is bounded, 1 -+ its error).
+struct StoredRangeV {
+  V nearest, farthest;
+};
+template <DepthStorage S, DepthMapping M>
+HWY_INLINE StoredRangeV RectRange(const MappedPlanes& m, double pErr, V left, V right, double top, double bottom) {
+  constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
+  const D d;
+  const Plane& p = m.p;
+  const V a = hn::Set(d, p.a), c = hn::Set(d, p.c), err = hn::Set(d, pErr);
+  const V pMin = hn::Sub(hn::Add(hn::Add(hn::Mul(a, p.a >= 0 ? left : right), hn::Set(d, p.b * (p.b >= 0 ? top : bottom))), c), err);
+  const V pMax = hn::Add(hn::Add(hn::Add(hn::Mul(a, p.a >= 0 ? right : left), hn::Set(d, p.b * (p.b >= 0 ? bottom : top))), c), err);
+  const V margin = hn::Set(d, 1e-12);
+  const V low = Quantize<S>(Clamp01(hn::Sub(pMin, hn::Mul(hn::Abs(pMin), margin))));
+  const V high = Quantize<S>(Clamp01(hn::Add(pMax, hn::Mul(hn::Abs(pMax), margin))));
+  return kGreater ? StoredRangeV{high, low} : StoredRangeV{low, high};
+}
+
 // The tile's part of the image: origin and size.
 struct TileRect {
   int x0, y0, w, h;
@@ -528,6 +550,11 @@ void RasterizeTileT(const TileJob& job) {
     const double pErr = planeError(m.p, x0 + w, y0 + h), qErr = planeError(m.q, x0 + w, y0 + h);
 
     const int bxFirst = rx0 / kBlockSize, bxLast = rx1 / kBlockSize;
+    // An affine mapped depth (q = 1: every perspective z, reversed and inv format) gets its
+    // bounds over each block's part of the box in the classification below, a vector of blocks
+    // at a time (the lanes repeat storedRangeOverRect's operations: the same bits).
+    const bool rectBounds = m.affine && pErr < 1e280;
+    HWY_ALIGN double rectNearest[kBlocksX], rectFarthest[kBlocksX];
     for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by) {
       // The row's blocks classified a vector of blocks at a time (lane: block column): skipped
       // when behind everything stored there, or outside an edge; in the triangle when inside
@@ -544,10 +571,22 @@ void RasterizeTileT(const TileJob& job) {
         const Mask inBox = hn::And(hn::Ge(column, hn::Set(d, double(bxFirst))), hn::Le(column, hn::Set(d, double(bxLast))));
         if (hn::AllFalse(d, inBox)) continue;
         const V far = hn::Load(d, s.blockFar + size_t(by * kBlocksX) + k);
-        const Mask beaten = kIds ? Nearer<kGreater>(far, qNearV) : hn::Not(Nearer<kGreater>(qNearV, far));
         const V firstColumn = hn::Mul(column, hn::Set(d, double(kBlockSize)));
         const V leftCol = hn::Max(firstColumn, hn::Set(d, double(rx0)));
         const V rightCol = hn::Min(hn::Add(firstColumn, hn::Set(d, double(kBlockSize - 1))), hn::Set(d, double(rx1)));
+        // The triangle's nearest value in each block: qNear, or the plane's bound over the
+        // block's part of the box when nearer to the truth (farther), which also rejects
+        // blocks the triangle covers only in part.
+        V nearestIn = qNearV;
+        if (rectBounds) {
+          const StoredRangeV r = RectRange<S, M>(m, pErr, hn::Add(leftCol, hn::Set(d, double(x0) + 0.5)),
+                                                 hn::Add(rightCol, hn::Set(d, double(x0) + 0.5)),
+                                                 double(y0 + cy0) + 0.5, double(y0 + cy1) + 0.5);
+          hn::Store(r.nearest, d, rectNearest + k);
+          hn::Store(r.farthest, d, rectFarthest + k);
+          nearestIn = Farther<kGreater>(qNearV, r.nearest);
+        }
+        const Mask beaten = kIds ? Nearer<kGreater>(far, nearestIn) : hn::Not(Nearer<kGreater>(nearestIn, far));
         const V one = hn::Set(d, double(kSubpixelOne)), half = hn::Set(d, double(kSubpixelOne / 2));
         const V origin = hn::Set(d, double(x0));
         const V left = hn::Add(hn::Mul(hn::Add(leftCol, origin), one), half);  // centerFixed, exact
@@ -594,7 +633,9 @@ void RasterizeTileT(const TileJob& job) {
         if (full && cx0 == bx * kBlockSize && cy0 == by * kBlockSize && cx1 == blockX1 && cy1 == blockY1) {
           StoredRange r{hn::GetLane(zConstant), hn::GetLane(zConstant)};
           if (!constantDepth)
-            r = storedRangeOverRect<S, M>(m, pErr, qErr, x0 + cx0 + 0.5, x0 + cx1 + 0.5, y0 + cy0 + 0.5, y0 + cy1 + 0.5);
+            r = rectBounds ? StoredRange{rectNearest[bx], rectFarthest[bx]}
+                           : storedRangeOverRect<S, M>(m, pErr, qErr, x0 + cx0 + 0.5, x0 + cx1 + 0.5, y0 + cy0 + 0.5,
+                                                       y0 + cy1 + 0.5);
           if (Beaten<M, kIds>(r.nearest, s.blockFar[b])) {
             if constexpr (kCountBlocks) ++count.blocksCulled;
             continue;
