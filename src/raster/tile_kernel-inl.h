@@ -148,6 +148,7 @@ HWY_INLINE double NearestLane(V v) {
 
 // storedRangeOverRect (raster/fragment_depth.hpp) for an affine m (q = 1) lane by lane, over the
 // rectangles [left, right] (lanes) x [top, bottom], with the same operations: the same bits.
+// Given a X at the columns where p is least and most (aXLow, aXHigh: a left or a right).
 // For planes whose error pErr (planeError, over the tile) is below 1e280 only: then |a| x + |b| y
 // + |c| is below 1e280 / 2^-49 < 2^1000 at every point of the tile, so p's bounds are finite
 // (storedRangeOverRect's "none" cannot occur; q = 1 is bounded, 1 -+ its error).
@@ -155,13 +156,13 @@ struct StoredRangeV {
   V nearest, farthest;
 };
 template <DepthStorage S, DepthMapping M>
-HWY_INLINE StoredRangeV RectRange(const MappedPlanes& m, double pErr, V left, V right, double top, double bottom) {
+HWY_INLINE StoredRangeV RectRange(const MappedPlanes& m, double pErr, V aXLow, V aXHigh, double top, double bottom) {
   constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
   const D d;
   const Plane& p = m.p;
-  const V a = hn::Set(d, p.a), c = hn::Set(d, p.c), err = hn::Set(d, pErr);
-  const V pMin = hn::Sub(hn::Add(hn::Add(hn::Mul(a, p.a >= 0 ? left : right), hn::Set(d, p.b * (p.b >= 0 ? top : bottom))), c), err);
-  const V pMax = hn::Add(hn::Add(hn::Add(hn::Mul(a, p.a >= 0 ? right : left), hn::Set(d, p.b * (p.b >= 0 ? bottom : top))), c), err);
+  const V c = hn::Set(d, p.c), err = hn::Set(d, pErr);
+  const V pMin = hn::Sub(hn::Add(hn::Add(aXLow, hn::Set(d, p.b * (p.b >= 0 ? top : bottom))), c), err);
+  const V pMax = hn::Add(hn::Add(hn::Add(aXHigh, hn::Set(d, p.b * (p.b >= 0 ? bottom : top))), c), err);
   const V margin = hn::Set(d, 1e-12);
   const V low = Quantize<S>(Clamp01(hn::Sub(pMin, hn::Mul(hn::Abs(pMin), margin))));
   const V high = Quantize<S>(Clamp01(hn::Add(pMax, hn::Mul(hn::Abs(pMax), margin))));
@@ -555,6 +556,37 @@ void RasterizeTileT(const TileJob& job) {
     // at a time (the lanes repeat storedRangeOverRect's operations: the same bits).
     const bool rectBounds = m.affine && pErr < 1e280;
     HWY_ALIGN double rectNearest[kBlocksX], rectFarthest[kBlocksX];
+    // What the classification below needs of each vector of block columns (lane: block column)
+    // that does not depend on the block row, computed once: whether the column meets the box,
+    // P's a X at the corners of the columns' parts of the box that bound it, and the edge
+    // functions' x terms, dy (X - ax), at the corners that make them largest and smallest.
+    constexpr size_t kColumnVectors = size_t(kBlocksX) / hn::MaxLanes(D());
+    static_assert(kColumnVectors >= 1 && size_t(kBlocksX) % hn::MaxLanes(D()) == 0);
+    V inBoxV[kColumnVectors], pXLow[kColumnVectors], pXHigh[kColumnVectors];
+    V xLargest[3][kColumnVectors], xSmallest[3][kColumnVectors];
+    for (size_t k = 0; k < size_t(kBlocksX); k += N) {
+      const V column = hn::Add(lane, hn::Set(d, double(k)));
+      const Mask inBox = hn::And(hn::Ge(column, hn::Set(d, double(bxFirst))), hn::Le(column, hn::Set(d, double(bxLast))));
+      inBoxV[k / N] = hn::VecFromMask(d, inBox);
+      if (hn::AllFalse(d, inBox)) continue;
+      const V firstColumn = hn::Mul(column, hn::Set(d, double(kBlockSize)));
+      const V leftCol = hn::Max(firstColumn, hn::Set(d, double(rx0)));
+      const V rightCol = hn::Min(hn::Add(firstColumn, hn::Set(d, double(kBlockSize - 1))), hn::Set(d, double(rx1)));
+      if (rectBounds) {
+        const V leftPx = hn::Add(leftCol, hn::Set(d, double(x0) + 0.5)), rightPx = hn::Add(rightCol, hn::Set(d, double(x0) + 0.5));
+        pXLow[k / N] = hn::Mul(hn::Set(d, m.p.a), m.p.a >= 0 ? leftPx : rightPx);
+        pXHigh[k / N] = hn::Mul(hn::Set(d, m.p.a), m.p.a >= 0 ? rightPx : leftPx);
+      }
+      const V one = hn::Set(d, double(kSubpixelOne)), half = hn::Set(d, double(kSubpixelOne / 2));
+      const V origin = hn::Set(d, double(x0));
+      const V left = hn::Add(hn::Mul(hn::Add(leftCol, origin), one), half);  // centerFixed, exact
+      const V right = hn::Add(hn::Mul(hn::Add(rightCol, origin), one), half);
+      for (int i = 0; i < 3; ++i) {
+        const V dy = hn::Set(d, double(e[i].dy)), ax = hn::Set(d, double(e[i].ax));
+        xLargest[i][k / N] = hn::Mul(dy, hn::Sub(e[i].dy < 0 ? right : left, ax));
+        xSmallest[i][k / N] = hn::Mul(dy, hn::Sub(e[i].dy < 0 ? left : right, ax));
+      }
+    }
     for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by) {
       // The row's blocks classified a vector of blocks at a time (lane: block column): skipped
       // when behind everything stored there, or outside an edge; in the triangle when inside
@@ -562,44 +594,36 @@ void RasterizeTileT(const TileJob& job) {
       // function on it, and an edge function is linear: its largest and smallest values are at
       // the corners its slopes point to and away from (E grows with x when dy < 0, with y when
       // dx > 0), so two corners decide. Computed in double, exactly: E = dx (py - ay) - dy (px -
-      // ax) with snapped coordinates below 2^23 in magnitude is below 2^49.
+      // ax) with snapped coordinates below 2^23 in magnitude is below 2^49; E < bias is then
+      // dx (py - ay) - bias < dy (px - ax), integers as well.
       const int cy0 = std::max(by * kBlockSize, ry0), cy1 = std::min(by * kBlockSize + kBlockSize - 1, ry1);
       const int64_t top = centerFixed(y0 + cy0), bottom = centerFixed(y0 + cy1);
+      double yLargest[3], ySmallest[3];  // per edge: dx (py - ay) - bias at the rows that bound it
+      for (int i = 0; i < 3; ++i) {
+        yLargest[i] = double(e[i].dx * ((e[i].dx > 0 ? bottom : top) - e[i].ay) - e[i].bias);
+        ySmallest[i] = double(e[i].dx * ((e[i].dx > 0 ? top : bottom) - e[i].ay) - e[i].bias);
+      }
       uint64_t visit = 0, inside = 0;  // bit bx: the block is drawn; the triangle covers its part of the box
       for (size_t k = 0; k < size_t(kBlocksX); k += N) {
-        const V column = hn::Add(lane, hn::Set(d, double(k)));
-        const Mask inBox = hn::And(hn::Ge(column, hn::Set(d, double(bxFirst))), hn::Le(column, hn::Set(d, double(bxLast))));
+        const Mask inBox = hn::MaskFromVec(inBoxV[k / N]);
         if (hn::AllFalse(d, inBox)) continue;
         const V far = hn::Load(d, s.blockFar + size_t(by * kBlocksX) + k);
-        const V firstColumn = hn::Mul(column, hn::Set(d, double(kBlockSize)));
-        const V leftCol = hn::Max(firstColumn, hn::Set(d, double(rx0)));
-        const V rightCol = hn::Min(hn::Add(firstColumn, hn::Set(d, double(kBlockSize - 1))), hn::Set(d, double(rx1)));
         // The triangle's nearest value in each block: qNear, or the plane's bound over the
         // block's part of the box when nearer to the truth (farther), which also rejects
         // blocks the triangle covers only in part.
         V nearestIn = qNearV;
         if (rectBounds) {
-          const StoredRangeV r = RectRange<S, M>(m, pErr, hn::Add(leftCol, hn::Set(d, double(x0) + 0.5)),
-                                                 hn::Add(rightCol, hn::Set(d, double(x0) + 0.5)),
-                                                 double(y0 + cy0) + 0.5, double(y0 + cy1) + 0.5);
+          const StoredRangeV r = RectRange<S, M>(m, pErr, pXLow[k / N], pXHigh[k / N], double(y0 + cy0) + 0.5,
+                                                 double(y0 + cy1) + 0.5);
           hn::Store(r.nearest, d, rectNearest + k);
           hn::Store(r.farthest, d, rectFarthest + k);
           nearestIn = Farther<kGreater>(qNearV, r.nearest);
         }
         const Mask beaten = kIds ? Nearer<kGreater>(far, nearestIn) : hn::Not(Nearer<kGreater>(nearestIn, far));
-        const V one = hn::Set(d, double(kSubpixelOne)), half = hn::Set(d, double(kSubpixelOne / 2));
-        const V origin = hn::Set(d, double(x0));
-        const V left = hn::Add(hn::Mul(hn::Add(leftCol, origin), one), half);  // centerFixed, exact
-        const V right = hn::Add(hn::Mul(hn::Add(rightCol, origin), one), half);
         Mask empty = hn::FirstN(d, 0), full = hn::FirstN(d, N);
-        for (const Edge& edge : e) {
-          const V dy = hn::Set(d, double(edge.dy)), ax = hn::Set(d, double(edge.ax)), bias = hn::Set(d, double(edge.bias));
-          const V yLargest = hn::Set(d, double(edge.dx * ((edge.dx > 0 ? bottom : top) - edge.ay)));
-          const V ySmallest = hn::Set(d, double(edge.dx * ((edge.dx > 0 ? top : bottom) - edge.ay)));
-          const V largest = hn::Sub(yLargest, hn::Mul(dy, hn::Sub(edge.dy < 0 ? right : left, ax)));
-          const V smallest = hn::Sub(ySmallest, hn::Mul(dy, hn::Sub(edge.dy < 0 ? left : right, ax)));
-          empty = hn::Or(empty, hn::Lt(largest, bias));
-          full = hn::And(full, hn::Ge(smallest, bias));
+        for (int i = 0; i < 3; ++i) {
+          empty = hn::Or(empty, hn::Lt(hn::Set(d, yLargest[i]), xLargest[i][k / N]));
+          full = hn::And(full, hn::Ge(hn::Set(d, ySmallest[i]), xSmallest[i][k / N]));
         }
         uint8_t bits[2][8] = {};
         hn::StoreMaskBits(d, hn::AndNot(beaten, hn::AndNot(empty, inBox)), bits[0]);
