@@ -587,6 +587,13 @@ void RasterizeTileT(const TileJob& job) {
         xSmallest[i][k / N] = hn::Mul(dy, hn::Sub(e[i].dy < 0 ? left : right, ax));
       }
     }
+    // Per block column met (bit bx of columnReady), what its blocks' rows need (see below).
+    constexpr size_t kVectors = size_t(kBlockSize) / hn::MaxLanes(D());  // per block row (1 on AVX-512)
+    static_assert(kVectors >= 1 && size_t(kBlockSize) % hn::MaxLanes(D()) == 0);
+    uint32_t columnReady = 0;
+    V colIn[kBlocksX][kVectors], colPX[kBlocksX][kVectors], colQX[kBlocksX][kVectors], colEdge[3][kBlocksX][kVectors];
+    const V stepYV[3] = {hn::Set(d, double(e[0].stepY())), hn::Set(d, double(e[1].stepY())),
+                         hn::Set(d, double(e[2].stepY()))};
     for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by) {
       // The row's blocks classified a vector of blocks at a time (lane: block column): skipped
       // when behind everything stored there, or outside an edge; in the triangle when inside
@@ -604,6 +611,8 @@ void RasterizeTileT(const TileJob& job) {
         ySmallest[i] = double(e[i].dx * ((e[i].dx > 0 ? top : bottom) - e[i].ay) - e[i].bias);
       }
       uint64_t visit = 0, inside = 0;  // bit bx: the block is drawn; the triangle covers its part of the box
+      double rowEdge[3];  // per edge: dx (py - ay) at the first row of the blocks' parts of the box
+      for (int i = 0; i < 3; ++i) rowEdge[i] = double(e[i].dx * (top - e[i].ay));
       for (size_t k = 0; k < size_t(kBlocksX); k += N) {
         const Mask inBox = hn::MaskFromVec(inBoxV[k / N]);
         if (hn::AllFalse(d, inBox)) continue;
@@ -684,25 +693,30 @@ void RasterizeTileT(const TileJob& job) {
 
         const int bxPixel = bx * kBlockSize;  // tile-local x of the block's first column
         // Per vector of the block's row (k / N): its columns in the box, a X of both planes
-        // (the same bits StoredDepth computes), and the edge functions at its pixels in the
-        // current row, stepped row by row (integers below 2^49: exact in double).
-        constexpr size_t kVectors = size_t(kBlockSize) / hn::MaxLanes(D());  // per block row (1 on AVX-512)
-        static_assert(kVectors >= 1 && size_t(kBlockSize) % hn::MaxLanes(D()) == 0);
-        V columnIn[kVectors], pX[kVectors], qX[kVectors], edgeRow[3][kVectors];
-        const V stepYV[3] = {hn::Set(d, double(e[0].stepY())), hn::Set(d, double(e[1].stepY())),
-                             hn::Set(d, double(e[2].stepY()))};
-        for (size_t k = 0; k < size_t(kBlockSize); k += N) {
-          const V col = hn::Add(lane, hn::Set(d, double(bxPixel + int(k))));
-          columnIn[k / N] = hn::VecFromMask(d, hn::And(hn::Ge(col, hn::Set(d, double(cx0))), hn::Le(col, hn::Set(d, double(cx1)))));
-          const V X = hn::Add(col, hn::Set(d, double(x0) + 0.5));
-          pX[k / N] = hn::Mul(hn::Set(d, m.p.a), X);
-          qX[k / N] = hn::Mul(hn::Set(d, m.q.a), X);
-          if (!full)
-            for (int i = 0; i < 3; ++i) {
-              const int64_t at = e[i].at(centerFixed(x0 + bxPixel + int(k)), centerFixed(y0 + cy0));
-              edgeRow[i][k / N] = hn::Add(hn::Set(d, double(at)), laneE[i]);
-            }
+        // (the same bits StoredDepth computes) — the block column's, computed at its first
+        // block — and the edge functions at its pixels in the current row, stepped row by row
+        // (integers below 2^49: exact in double, in any order).
+        if (!(columnReady >> bx & 1)) {
+          columnReady |= 1u << bx;
+          for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+            const V col = hn::Add(lane, hn::Set(d, double(bxPixel + int(k))));
+            colIn[bx][k / N] = hn::VecFromMask(d, hn::And(hn::Ge(col, hn::Set(d, double(cx0))), hn::Le(col, hn::Set(d, double(cx1)))));
+            const V X = hn::Add(col, hn::Set(d, double(x0) + 0.5));
+            colPX[bx][k / N] = hn::Mul(hn::Set(d, m.p.a), X);
+            colQX[bx][k / N] = hn::Mul(hn::Set(d, m.q.a), X);
+            for (int i = 0; i < 3; ++i)  // lane j: j stepX - dy (px - ax) at the vector's first pixel px
+              colEdge[i][bx][k / N] =
+                  hn::Sub(laneE[i], hn::Set(d, double(e[i].dy * (centerFixed(x0 + bxPixel + int(k)) - e[i].ax))));
+          }
         }
+        const V* columnIn = colIn[bx];
+        const V* pX = colPX[bx];
+        const V* qX = colQX[bx];
+        V edgeRow[3][kVectors];
+        if (!full)
+          for (int i = 0; i < 3; ++i)
+            for (size_t k = 0; k < size_t(kBlockSize); k += N)
+              edgeRow[i][k / N] = hn::Add(hn::Set(d, rowEdge[i]), colEdge[i][bx][k / N]);
         // The block's farthest value after this triangle, gathered from the rows it visits.
         // The nearest value of the rows' in-image columns, per vector of a row (a lane is one
         // column): the nearest written, or a stored value no nearer than blockNear (a bound of
