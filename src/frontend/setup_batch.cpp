@@ -150,10 +150,24 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     const size_t lanes = std::min(N, count - first);
     // Each vertex's fields (ProjectedVertex: sx, sy, num, den; 4 x 8 bytes), and snap
     // (snapCoordinate: an integer below 2^23, the same in double as in int64).
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+    // Each lane's vertex indices: the batch's own lists, or (a last, partial batch) its last
+    // triangle's repeated.
+    uint32_t padded[3][kSetupBatch];
+    const uint32_t* index[3];
+    for (int k = 0; k < 3; ++k) {
+      index[k] = vertex[k] + first;
+      if (lanes < N) {
+        for (size_t j = 0; j < N; ++j) padded[k][j] = vertex[k][first + std::min(j, lanes - 1)];
+        index[k] = padded[k];
+      }
+    }
+#else
     HWY_ALIGN int64_t offset[3][kSetupBatch];
     for (int k = 0; k < 3; ++k)
       for (size_t j = 0; j < N; ++j)
         offset[k][j] = int64_t(vertex[k][first + std::min(j, lanes - 1)]) * int64_t(sizeof(ProjectedVertex) / 8);
+#endif
     const double* base = reinterpret_cast<const double*>(projected);
     const V subpixel = hn::Set(d, double(kSubpixelOne)), halfUnit = hn::Set(d, 0.5);
     V sx[3], sy[3], X[3], Y[3], num[3], den[3];
@@ -165,7 +179,7 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
       const hn::Half<D> h;
       using H = hn::Vec<decltype(h)>;
       H v[8];
-      for (int j = 0; j < 8; ++j) v[j] = hn::LoadU(h, base + offset[k][j]);
+      for (int j = 0; j < 8; ++j) v[j] = hn::LoadU(h, base + size_t(index[k][j]) * (sizeof(ProjectedVertex) / 8));
       H field[4][2];  // sx, sy, num, den; lanes 0-3 and 4-7
       for (int g = 0; g < 2; ++g) {
         const H* q = v + 4 * g;
