@@ -651,8 +651,10 @@ void RasterizeTileT(const TileJob& job) {
         const int cx0 = std::max(bx * kBlockSize, rx0), cx1 = std::min(bx * kBlockSize + kBlockSize - 1, rx1);
         if constexpr (kCountBlocks) ++(full ? count.blocksFull : count.blocksPartial);
         // A block the triangle covers whole (every pixel centre of the block, in the image):
-        // the triangle's bounds over its corner centres (storedRangeOverRect; every covered
-        // value lies within them). Behind everything stored there: the block is skipped. In front of it
+        // the triangle's bounds over its corner centres (storedRangeOverRect, or the same bits
+        // from the classification; every covered value lies within them). Behind everything
+        // stored there: the block is skipped (with an affine depth, already classified so,
+        // covered whole or not: random --occlusion --cull back 1.11-1.15x). In front of it
         // all: the block becomes the triangle's plane, in O(1) — parallel to the image plane
         // (every fragment stores zConstant's bits) over any block; sloped, over a block still
         // uniform (cleared, or another plane not yet written out; the resolve's preparation
