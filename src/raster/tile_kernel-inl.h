@@ -449,17 +449,29 @@ void RasterizeTileT(const TileJob& job) {
         Materialize<S, M, kIds>(job, tf);
         dirtyBlocks = 0;
       }
+      const int first = (by0 / kBlockSize) * kBlocksX + bx0 / kBlockSize;
+      const int across = bx1 / kBlockSize - bx0 / kBlockSize, down = by1 / kBlockSize - by0 / kBlockSize;
+      if (across <= 1 && down <= 1) {  // (mostly) 1 to 4 blocks: their corners, repeated when fewer
+        const int b[4] = {first, first + across, first + down * kBlocksX, first + down * kBlocksX + across};
+        if (Beaten<M, kIds>(qNear, s.blockFar[b[0]]) & Beaten<M, kIds>(qNear, s.blockFar[b[1]]) &
+            Beaten<M, kIds>(qNear, s.blockFar[b[2]]) & Beaten<M, kIds>(qNear, s.blockFar[b[3]])) {
+          if constexpr (kCountBlocks) ++count.blocksCulled;
+          return true;
+        }
+        for (int i = 0; i < 4; ++i)  // (a block repeated is no longer Lazy the second time)
+          if (Lazy(s, b[i])) MaterializeBlock<S, M, kIds>(job, tf, b[i]);
+        return false;
+      }
       bool beaten = true;
-      for (int by = by0 / kBlockSize; by <= by1 / kBlockSize; ++by)
-        for (int bx = bx0 / kBlockSize; bx <= bx1 / kBlockSize; ++bx)
-          beaten &= Beaten<M, kIds>(qNear, s.blockFar[by * kBlocksX + bx]);
+      for (int by = 0; by <= down; ++by)
+        for (int bx = 0; bx <= across; ++bx) beaten &= Beaten<M, kIds>(qNear, s.blockFar[first + by * kBlocksX + bx]);
       if (beaten) {
         if constexpr (kCountBlocks) ++count.blocksCulled;
         return true;
       }
-      for (int by = by0 / kBlockSize; by <= by1 / kBlockSize; ++by)
-        for (int bx = bx0 / kBlockSize; bx <= bx1 / kBlockSize; ++bx)
-          if (Lazy(s, by * kBlocksX + bx)) MaterializeBlock<S, M, kIds>(job, tf, by * kBlocksX + bx);
+      for (int by = 0; by <= down; ++by)
+        for (int bx = 0; bx <= across; ++bx)
+          if (Lazy(s, first + by * kBlocksX + bx)) MaterializeBlock<S, M, kIds>(job, tf, first + by * kBlocksX + bx);
       return false;
     };
 
