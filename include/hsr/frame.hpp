@@ -79,7 +79,7 @@ struct Stats {
   std::vector<std::pair<std::string, double>> time_ms;  // stage -> ms, in pipeline order
   std::optional<uint64_t> wrong_pixels, ambiguous_pixels;  // with --verify
   // The tiled rasterizer only (README, Performance: deferred back faces and clusters): triangles
-  // the front end did not set up but deferred to the tile pass, the clusters of 64 among them,
+  // the front end did not set up but deferred to the tile pass, the clusters (runs of 32) among them,
   // and the deferred triangles the tile pass set up because they might show.
   std::optional<uint64_t> triangles_deferred, clusters_deferred, triangles_set_up_late;
 

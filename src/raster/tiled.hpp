@@ -306,7 +306,7 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater
 /// bit. The set-up needs Bins::projected and Bins::camera, which the caller sets after
 /// runFrontEnd (its FrontEndOutput::projected and camera, alive until the tile pass ends).
 ///
-/// Deferred clusters (FrontEndChunk::clusters, deferCluster in frontend.hpp): runs of 64
+/// Deferred clusters (FrontEndChunk::clusters, deferCluster in frontend.hpp): runs of 32
 /// well-shaped triangles that all face away from the eye by a margin are not set up by the
 /// front end at all; each is binned, as one item with its pixel box and a conservative nearest
 /// bound, to every tile the box overlaps (Bins::clusters). A tile tests it like a deferred face;
