@@ -439,8 +439,22 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
     if (s.state != TileState::Pixels) return beaten(nearest, uniformFar);
     if (beaten(nearest, s.tileFar)) return true;  // (behind the farthest value of the tile: of every block)
     for (int by = y0 / kBlockSize; by <= y1 / kBlockSize; ++by)
-      for (int bx = x0 / kBlockSize; bx <= x1 / kBlockSize; ++bx)
-        if (!beaten(nearest, s.blockFar[by * kBlocksX + bx])) return false;
+      for (int bx = x0 / kBlockSize; bx <= x1 / kBlockSize; ++bx) {
+        const int b = by * kBlocksX + bx;
+        if (beaten(nearest, s.blockFar[b])) continue;
+        // Not behind the block's farthest value: behind every stored value of the box's part of
+        // the block? (A block held pixel by pixel only: not blockKey or blockClear. Near a
+        // silhouette the box often reaches only the drawn part of a block with background.)
+        if (s.blockKey[b] || s.blockClear[b]) return false;
+        const int cx0 = std::max(x0, bx * kBlockSize), cx1 = std::min(x1, bx * kBlockSize + kBlockSize - 1);
+        const int cy0 = std::max(y0, by * kBlockSize), cy1 = std::min(y1, by * kBlockSize + kBlockSize - 1);
+        for (int y = cy0; y <= cy1; ++y) {
+          const double* row = s.depth + size_t(y) * kTileSize;
+          bool all = true;
+          for (int x = cx0; x <= cx1; ++x) all &= beaten(nearest, row[x]);
+          if (!all) return false;
+        }
+      }
     return true;
   };
   auto boxHidden = [&](double nearest, uint32_t box) {
