@@ -254,17 +254,21 @@ bool clusterInView(const TriangleCluster& cl, const ClusterView& view, const Cam
   out.zMin = out.x0 = out.y0 = std::numeric_limits<double>::infinity();
   out.zMax = out.x1 = out.y1 = -out.zMin;
   const double planeScale = 2 * kGuardBandPixels + cam.width + cam.height + 1;
+  // The magnitudes of the corners' terms, bounded once for the box: |M[j][r] p_j| at the box's
+  // largest |p_j| (at least every corner's own: the margins below only grow).
+  const dvec3 most = glm::max(glm::abs(cl.bounds.lo), glm::abs(cl.bounds.hi));
+  auto terms = [&](int r) {
+    return std::abs(M[0][r] * most.x) + std::abs(M[1][r] * most.y) + std::abs(M[2][r] * most.z) + std::abs(M[3][r]);
+  };
+  const double wTerms = terms(3);
+  const double magnitude = terms(0) + terms(1) + terms(2) + wTerms * planeScale + cam.near + cam.far;
+  const double margin = 1e-9 * magnitude;
   for (int c = 0; c < 8; ++c) {
     const dvec3 p{c & 1 ? cl.bounds.hi.x : cl.bounds.lo.x, c & 2 ? cl.bounds.hi.y : cl.bounds.lo.y,
                   c & 4 ? cl.bounds.hi.z : cl.bounds.lo.z};
     const HVertex h = transformVertex(p, M);
-    auto terms = [&](int r) {
-      return std::abs(M[0][r] * p.x) + std::abs(M[1][r] * p.y) + std::abs(M[2][r] * p.z) + std::abs(M[3][r]);
-    };
-    const double wTerms = terms(3);
-    const double magnitude = terms(0) + terms(1) + terms(2) + wTerms * planeScale + cam.near + cam.far;
     for (int plane = 0; plane < kPlanes; ++plane)
-      if (!(planeDistance(h, plane, cam) > 1e-9 * magnitude)) return false;
+      if (!(planeDistance(h, plane, cam) > margin)) return false;
     out.zMin = std::min(out.zMin, h.w - 1e-12 * wTerms);
     out.zMax = std::max(out.zMax, h.w + 1e-12 * wTerms);
     const double sx = h.hx / h.w, sy = h.hy / h.w;
