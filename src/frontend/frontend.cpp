@@ -263,12 +263,20 @@ bool clusterInView(const TriangleCluster& cl, const ClusterView& view, const Cam
   const double wTerms = terms(3);
   const double magnitude = terms(0) + terms(1) + terms(2) + wTerms * planeScale + cam.near + cam.far;
   const double margin = 1e-9 * magnitude;
+  // The corners' homogeneous coordinates as transformVertex computes them (the same products,
+  // added in the same order), each product once: corner c takes lo or hi by its bits 1, 2, 4.
+  double term[3][4][2];  // [axis][row][lo, hi]
+  for (int r = 0; r < 4; ++r)
+    for (int j = 0; j < 3; ++j) term[j][r][0] = M[j][r] * cl.bounds.lo[j], term[j][r][1] = M[j][r] * cl.bounds.hi[j];
+  HVertex corner[8];
+  bool inside = true;
   for (int c = 0; c < 8; ++c) {
-    const dvec3 p{c & 1 ? cl.bounds.hi.x : cl.bounds.lo.x, c & 2 ? cl.bounds.hi.y : cl.bounds.lo.y,
-                  c & 4 ? cl.bounds.hi.z : cl.bounds.lo.z};
-    const HVertex h = transformVertex(p, M);
-    for (int plane = 0; plane < kPlanes; ++plane)
-      if (!(planeDistance(h, plane, cam) > margin)) return false;
+    auto row = [&](int r) { return ((term[0][r][c & 1] + term[1][r][c >> 1 & 1]) + term[2][r][c >> 2 & 1]) + M[3][r]; };
+    corner[c] = {row(0), row(1), row(2), row(3)};
+    for (int plane = 0; plane < kPlanes; ++plane) inside &= planeDistance(corner[c], plane, cam) > margin;
+  }
+  if (!inside) return false;
+  for (const HVertex& h : corner) {
     out.zMin = std::min(out.zMin, h.w - 1e-12 * wTerms);
     out.zMax = std::max(out.zMax, h.w + 1e-12 * wTerms);
     const double sx = h.hx / h.w, sy = h.hy / h.w;
