@@ -424,7 +424,8 @@ void setUpCluster(const Bins& bins, size_t c, size_t k, const DepthSetup& depth,
 // The deferred back faces and clusters binned to `tile` that may change it, as rasterizeTile's
 // Front pass left it in `s`: set up (their records in Bins::late) and listed in order.late. A face
 // or a cluster is hidden when every block its box touches holds nothing farther than its nearest
-// bound (Beaten, with the kernel's tie rule); so is each triangle of a cluster that is not;
+// bound (Beaten, with the kernel's tie rule) — by the block's farthest value, or else by the
+// stored values of the box's part of the block; so is each triangle of a cluster that is not;
 // hidden ones are counted as culled triangle-tile pairs (a hidden cluster as all its triangles).
 void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, const TileScratch& s, TileOrder& order,
                 RasterCounters& counters) {
