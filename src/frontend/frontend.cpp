@@ -294,7 +294,7 @@ bool deferCluster(const TriangleCluster& cl, const ClusterView& view, const Came
   if (depth.orthographic || !clusterInView(cl, view, cam, M, in)) return false;
   // Pixels whose centres a triangle inside may cover: centres x + 1/2 within 1/256 of a pixel of
   // [x0, x1] (snapping moves a vertex by 1/512; the rest is room for rounding, ~1e-12 relative).
-  // (Rather than a whole pixel of margin each side: sphere, a third fewer clusters set up late.)
+  // (Rather than a whole pixel of margin each side: sphere, a sixth fewer triangles set up late.)
   constexpr double kRoom = 1.0 / 256;
   const double bx0 = std::max(0.0, std::ceil(in.x0 - 0.5 - kRoom));
   const double bx1 = std::min(double(cam.width - 1), std::floor(in.x1 - 0.5 + kRoom));
