@@ -1,7 +1,8 @@
 // The occlusion buffer (include/hsr/occlusion.hpp): the tiled z-buffer's front end, binning and
-// kernel (depth only), with one tile buffer per screen tile kept after the pass instead of a
-// worker's scratch resolved into an image. Queries read the tiles' states and bounds; the depth
-// image is the z-buffer's depth-only resolve, run on demand.
+// kernel (depth only), with one kept tile per screen tile (tiled::KeptTile: each tile rasterized
+// in the worker's scratch, then stored) instead of a worker's scratch resolved into an image.
+// Queries read the tiles' states and bounds; the depth image is the z-buffer's depth-only
+// resolve of each kept tile unpacked, run on demand.
 #include <hsr/occlusion.hpp>
 
 #include <atomic>
@@ -18,10 +19,10 @@ namespace hsr {
 
 struct OcclusionBuffer::Impl {
   algo::TiledState state;
-  // One tile buffer per screen tile, kept between calls. Allocated without initialising (each
-  // pass sets every tile's state; pixel buffers are written before they are read), so the pages
-  // of buffers a frame never touches (the triangle ids, unused here) are not even mapped in.
-  std::unique_ptr<tiled::TileScratch[]> tiles;
+  // One kept tile per screen tile, between calls (each rasterized in a worker's scratch, then
+  // stored: tiled::storeTile). Allocated without initialising (each pass sets every tile's
+  // summary; pixel values are written before they are read).
+  std::unique_ptr<tiled::KeptTile[]> tiles;
   size_t tileCapacity = 0;
   DepthSetup depth;
   Camera camera;
@@ -96,16 +97,20 @@ const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, c
   const tiled::Bins& bins = im.state.bins;
   const size_t tiles = size_t(bins.tileCount());
   if (im.tileCapacity < tiles) {
-    im.tiles.reset(new tiled::TileScratch[tiles]);  // default-initialised: see Impl::tiles
+    im.tiles.reset(new tiled::KeptTile[tiles]);  // default-initialised: see Impl::tiles
     im.tileCapacity = tiles;
   }
   const int workers = algo::prepareTilePass(im.state, im.threads);
+  if (im.state.scratch.size() < size_t(workers)) im.state.scratch.resize(size_t(workers));
   algo::assignUnits(im.state, workers, tiles, [](size_t tile) { return std::pair(int(tile), 1); });
   parallelFor(0, size_t(workers), workers, [&](size_t worker) {
     const size_t part = currentPart();  // (tiles whose records this thread set up come first)
-    for (size_t tile; (tile = im.state.tileWork.next(part)) < tiles;)
-      tiled::rasterizeTile(bins, int(tile), im.depth, false, im.tiles[tile], im.state.orders[worker],
-                           im.state.counters[tile]);
+    tiled::TileScratch& scratch = im.state.scratch[worker];
+    for (size_t tile; (tile = im.state.tileWork.next(part)) < tiles;) {
+      tiled::rasterizeTile(bins, int(tile), im.depth, false, scratch, im.state.orders[worker], im.state.counters[tile]);
+      tiled::storeTile(scratch, im.depth, im.tiles[tile]);
+    }
+    tiled::finishResolves();
   });
   tiled::RasterCounters counters;
   for (size_t tile = 0; tile < tiles; ++tile) counters.add(im.state.counters[tile]);
@@ -114,7 +119,7 @@ const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, c
   st.algorithm = "occlusion";
   st.depth_format = opt.depthFormat.name();
   algo::tiledStats(st, im.state.fe, &bins, counters);
-  st.memory_bytes = im.state.memoryBytes() + im.tileCapacity * sizeof(tiled::TileScratch) + im.state.fe.memoryBytes();
+  st.memory_bytes = im.state.memoryBytes() + im.tileCapacity * sizeof(tiled::KeptTile) + im.state.fe.memoryBytes();
   st.addTime("total", total.ms());
   im.width = camera.width;
   im.height = camera.height;
@@ -178,15 +183,15 @@ void OcclusionBuffer::depthImage(Frame& frame) const {
   const tiled::Bins& bins = im.state.bins;
   frame.allocate(bins.width, bins.height, FrameOutputs::DepthOnly);
   frame.stats = im.stats;
-  // One tile row per task, written band by band across it (long row pieces: tiled::resolveTile).
+  // One tile row per task: each kept tile unpacked into the task's scratch, then resolved.
   std::vector<uint64_t> covered(size_t(bins.tilesY), 0);
   parallelFor(0, size_t(bins.tilesY), im.threads, [&](size_t ty) {
-    for (int row = 0; row < tiled::kTileSize; row += 8)
-      for (int tx = 0; tx < bins.tilesX; ++tx) {
-        const int tile = int(ty) * bins.tilesX + tx;
-        covered[ty] += tiled::resolveTile(bins, tile, im.depth, FrameOutputs::DepthOnly, nullptr, Rgba8{},
-                                          im.tiles[size_t(tile)], frame, row, row + 8);
-      }
+    const auto scratch = std::make_unique<tiled::TileScratch>();
+    for (int tx = 0; tx < bins.tilesX; ++tx) {
+      const int tile = int(ty) * bins.tilesX + tx;
+      tiled::loadTile(im.tiles[size_t(tile)], im.depth, *scratch);
+      covered[ty] += tiled::resolveTile(bins, tile, im.depth, FrameOutputs::DepthOnly, nullptr, Rgba8{}, *scratch, frame);
+    }
     tiled::finishResolves();
   });
   for (uint64_t c : covered) frame.stats.covered_pixels += c;

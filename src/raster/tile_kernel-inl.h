@@ -1118,6 +1118,57 @@ void RasterizeTile(const TileJob& job) {
   });
 }
 
+// storeTile (tiled.hpp): the summary, then the values of the blocks held pixel by pixel, each in
+// the format's 32 bits (keptStored inverts it), streamed: a block's 64 values are 4 whole lines.
+template <DepthStorage S>
+void StoreTileT(const TileScratch& from, KeptTile& to) {
+  const D d;
+  const size_t N = hn::Lanes(d);
+  const hn::Rebind<int32_t, D> di32;
+  const hn::Rebind<uint32_t, D> du32;
+  const hn::Rebind<float, D> df;
+  to.tileFar = from.tileFar;
+  to.tileNear = from.tileNear;
+  to.tileFarStale = from.tileFarStale;
+  to.resolved = from.resolved;
+  to.state = from.state;
+  to.plane = from.plane;
+  to.planeKey = from.planeKey;
+  if (from.state != TileState::Pixels) return;  // (the blocks' summaries are read in state Pixels only)
+  auto stream = [](auto& dst, const auto& src) {  // an array of 64-bit values, whole lines
+    static_assert(sizeof(dst) % 64 == 0);
+    StreamCopy(reinterpret_cast<uint32_t*>(&dst), reinterpret_cast<const uint32_t*>(&src), sizeof(dst) / 4);
+  };
+  stream(to.blockFar, from.blockFar);
+  stream(to.blockNear, from.blockNear);
+  stream(to.blockKey, from.blockKey);
+  stream(to.blockTriangle, from.blockTriangle);
+  std::memcpy(to.blockClear, from.blockClear, sizeof(from.blockClear));
+  constexpr int kBlocksX = kTileSize / kBlockSize;
+  HWY_ALIGN uint32_t block[kBlockSize * kBlockSize];  // staged, then streamed whole
+  for (int b = 0; b < kBlocksPerTile; ++b) {
+    if (from.blockKey[b] != 0 || from.blockClear[b]) continue;  // uniform: its pixel values are stale
+    const double* first = from.depth + size_t(b / kBlocksX * kBlockSize * kTileSize + b % kBlocksX * kBlockSize);
+    for (int y = 0; y < kBlockSize; ++y)
+      for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+        const V v = hn::Load(d, first + size_t(y) * kTileSize + k);
+        hn::Vec<decltype(du32)> bits;
+        if constexpr (S == DepthStorage::F32) {
+          bits = hn::BitCast(du32, hn::DemoteTo(df, v));
+        } else {  // an integer code below 2^32, through int32 (exact; outside the image: any bits)
+          const auto offset = hn::DemoteTo(di32, hn::Sub(v, hn::Set(d, 2147483648.0)));
+          bits = hn::Xor(hn::BitCast(du32, offset), hn::Set(du32, 0x80000000u));
+        }
+        hn::Store(bits, du32, block + size_t(y) * kBlockSize + k);
+      }
+    StreamCopy(to.depth + size_t(b) * kBlockSize * kBlockSize, block, size_t(kBlockSize) * kBlockSize);
+  }
+}
+
+void StoreTile(const TileScratch& from, const DepthSetup& depth, KeptTile& to) {
+  visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() { StoreTileT<S>(from, to); });
+}
+
 const char* KernelTarget() { return hwy::TargetName(HWY_TARGET); }
 
 void FlushStreams() { hwy::FlushStream(); }

@@ -31,6 +31,7 @@ HWY_EXPORT(ResolveTile);
 HWY_EXPORT(PrepareResolve);
 HWY_EXPORT(KernelTarget);
 HWY_EXPORT(FlushStreams);
+HWY_EXPORT(StoreTile);
 
 void Bins::countEntries() {
   const size_t tiles = size_t(tileCount());
@@ -578,7 +579,7 @@ double planeStored(const MappedPlanes& m, int x, int y) {
 // any part of a tile in state Clear or Plane), until it returns true; returns whether it did. The
 // planes are mapped once, not per pixel.
 template <DepthStorage S, DepthMapping M, class Fn>
-bool anyStoredIn(const TileScratch& s, const DepthSetup& depth, int tx0, int ty0, int x0, int y0, int x1, int y1,
+bool anyStoredIn(const KeptTile& s, const DepthSetup& depth, int tx0, int ty0, int x0, int y0, int x1, int y1,
                  Fn&& fn) {
   constexpr int kBlocksX = kTileSize / kBlockSize;
   const int block = (y0 / kBlockSize) * kBlocksX + x0 / kBlockSize;  // (state Pixels: the only one)
@@ -592,14 +593,14 @@ bool anyStoredIn(const TileScratch& s, const DepthSetup& depth, int tx0, int ty0
     for (int x = x0; x <= x1; ++x) {
       const double v = plane     ? planeStored<S>(m, tx0 + x, ty0 + y)
                        : cleared ? clear
-                                 : s.depth[size_t(y) * kTileSize + size_t(x)];
+                                 : keptStored<S>(s.depth[KeptTile::at(x, y)]);
       if (fn(v)) return true;
     }
   return false;
 }
 
 template <DepthStorage S, DepthMapping M>
-bool anyFartherT(const TileScratch& s, const DepthSetup& depth, int tx0, int ty0, int x0, int y0, int x1, int y1,
+bool anyFartherT(const KeptTile& s, const DepthSetup& depth, int tx0, int ty0, int x0, int y0, int x1, int y1,
                  double q) {
   constexpr int kBlocksX = kTileSize / kBlockSize;
   // Bounds: every stored value is nearer than or equal to the farthest bound (the tile's, or
@@ -630,10 +631,10 @@ bool anyFartherT(const TileScratch& s, const DepthSetup& depth, int tx0, int ty0
 
 }  // namespace
 
-double storedAt(const Bins& bins, int tile, const DepthSetup& depth, const TileScratch& scratch, int x, int y) {
+double storedAt(const Bins& bins, int tile, const DepthSetup& depth, const KeptTile& kept, int x, int y) {
   double v = 0;
   visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() {
-    anyStoredIn<S, M>(scratch, depth, (tile % bins.tilesX) * kTileSize, (tile / bins.tilesX) * kTileSize, x, y, x, y,
+    anyStoredIn<S, M>(kept, depth, (tile % bins.tilesX) * kTileSize, (tile / bins.tilesX) * kTileSize, x, y, x, y,
                       [&](double stored) {
                         v = stored;
                         return true;
@@ -642,11 +643,11 @@ double storedAt(const Bins& bins, int tile, const DepthSetup& depth, const TileS
   return v;
 }
 
-bool anyFarther(const Bins& bins, int tile, const DepthSetup& depth, const TileScratch& scratch, int x0, int y0,
+bool anyFarther(const Bins& bins, int tile, const DepthSetup& depth, const KeptTile& kept, int x0, int y0,
                 int x1, int y1, double stored) {
   bool any = false;
   visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() {
-    any = anyFartherT<S, M>(scratch, depth, (tile % bins.tilesX) * kTileSize, (tile / bins.tilesX) * kTileSize, x0,
+    any = anyFartherT<S, M>(kept, depth, (tile % bins.tilesX) * kTileSize, (tile / bins.tilesX) * kTileSize, x0,
                             y0, x1, y1, stored);
   });
   return any;
@@ -655,6 +656,20 @@ bool anyFarther(const Bins& bins, int tile, const DepthSetup& depth, const TileS
 const char* kernelTarget() { return HWY_DYNAMIC_DISPATCH(KernelTarget)(); }
 
 void finishResolves() { HWY_DYNAMIC_DISPATCH(FlushStreams)(); }
+
+void storeTile(const TileScratch& from, const DepthSetup& depth, KeptTile& to) {
+  HWY_DYNAMIC_DISPATCH(StoreTile)(from, depth, to);
+}
+
+void loadTile(const KeptTile& from, const DepthSetup& depth, TileScratch& to) {
+  static_cast<TileSummary&>(to) = from;
+  if (from.state != TileState::Pixels) return;
+  visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() {
+    for (int y = 0; y < kTileSize; ++y)
+      for (int x = 0; x < kTileSize; ++x)
+        to.depth[size_t(y) * kTileSize + size_t(x)] = keptStored<S>(from.depth[KeptTile::at(x, y)]);
+  });
+}
 
 }  // namespace hsr::tiled
 #endif  // HWY_ONCE

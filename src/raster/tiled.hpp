@@ -35,6 +35,7 @@
 #include <hsr/render.hpp>
 
 #include <atomic>
+#include <bit>
 #include <cstdint>
 #include <memory>
 #include <new>
@@ -227,14 +228,11 @@ struct TileEntry {
   double nearest;  // its nearest bound (FrontEndChunk::nearest)
 };
 
-/// A worker's tile: stored depth (as double: every format's values are exact in it) and the
-/// winning triangle (triangleKey, 0 = none), row-major kTileSize x kTileSize, plus the farthest
-/// stored value per block and per tile that reject triangles early, and the nearest stored
-/// value of the tile that lets a triangle in front of all of it replace it whole. Reused tile
-/// after tile.
-struct alignas(64) TileScratch {
-  alignas(64) double depth[kTileSize * kTileSize];
-  alignas(64) uint64_t triangle[kTileSize * kTileSize];
+/// What a tile's buffers mean and how they are bounded: its state, the uniform states of its
+/// blocks, and the conservative farthest value per block and per tile that reject triangles
+/// early, with the nearest stored value of the tile that lets a triangle in front of all of it
+/// replace it whole. Shared by a worker's tile (TileScratch) and a kept one (KeptTile).
+struct TileSummary {
   alignas(64) double blockFar[kBlocksPerTile];   // valid in state Pixels: no value of the block is farther
   alignas(64) double blockNear[kBlocksPerTile];  // ... nearer (conservative bounds, both)
   // State Pixels, per block: a triangle that won every pixel of the block at once (its key, 0 =
@@ -258,6 +256,35 @@ struct alignas(64) TileScratch {
   const SetupTriangle* plane;  // state Plane: the triangle, and its key
   uint64_t planeKey;
 };
+
+/// A worker's tile: stored depth (as double: every format's values are exact in it) and the
+/// winning triangle (triangleKey, 0 = none), row-major kTileSize x kTileSize, with the
+/// summary that says which of those values are current. Reused tile after tile.
+struct alignas(64) TileScratch : TileSummary {
+  alignas(64) double depth[kTileSize * kTileSize];
+  alignas(64) uint64_t triangle[kTileSize * kTileSize];
+};
+
+/// A rasterized tile kept after the pass for queries (the occlusion buffer keeps one per screen
+/// tile): the summary, and the stored values of the blocks held pixel by pixel in 32 bits, block
+/// by block (KeptTile::at) — a quarter of a TileScratch. Each value is the format's exactly:
+/// for f32 formats the float's bits, for the integer formats the integer code (keptStored).
+struct alignas(64) KeptTile : TileSummary {
+  alignas(64) uint32_t depth[kTileSize * kTileSize];
+  /// The index of tile-local pixel (x, y): block b's 64 values are [64 b, 64 b + 64), row by row.
+  static size_t at(int x, int y) {
+    constexpr int kBlocksX = kTileSize / kBlockSize;
+    return size_t(((y / kBlockSize) * kBlocksX + x / kBlockSize) * kBlockSize * kBlockSize +
+                  (y % kBlockSize) * kBlockSize + x % kBlockSize);
+  }
+};
+
+/// A KeptTile's 32 bits of a stored value, as the double the kernel compares (exact).
+template <DepthStorage S>
+inline double keptStored(uint32_t bits) {
+  if constexpr (S == DepthStorage::F32) return double(std::bit_cast<float>(bits));
+  else return double(bits);
+}
 
 /// A worker's lists for orderTile(), reused tile after tile (one per worker, not per tile: a
 /// tile's list can hold every triangle of the frame).
@@ -358,15 +385,26 @@ uint64_t resolveTile(const Bins& bins, int tile, const DepthSetup& depth, FrameO
 /// Makes the calling thread's resolveTile() writes visible to other threads (a store fence).
 void finishResolves();
 
-/// Queries on a tile that rasterizeTile left in `scratch` (the occlusion buffer keeps one per
-/// tile). Its uniform states refer to the frame's set-up triangles, which must still be alive.
+/// Keeps what rasterizeTile(ids = false) left in `from` in `to`, which then answers the queries
+/// below as `from` would (the uniform blocks' pixel values and the triangle buffer are not
+/// copied). For tiles kept long after they were rasterized (the occlusion buffer's): rasterized in
+/// a worker's scratch, which stays in the core's cache tile after tile, then written out with
+/// streaming stores at a quarter of the size, so the kernel never waits on a kept tile's cold
+/// lines. The writing thread calls finishResolves() before another thread reads `to`.
+void storeTile(const TileScratch& from, const DepthSetup& depth, KeptTile& to);
+/// The inverse: `to` as the kernel left `from` in rasterizeTile (depth; ids are not kept), for
+/// resolveTile(DepthOnly).
+void loadTile(const KeptTile& from, const DepthSetup& depth, TileScratch& to);
+
+/// Queries on a tile kept by storeTile (the occlusion buffer keeps one per screen tile). Its
+/// uniform states refer to the frame's set-up triangles, which must still be alive.
 /// Scalar code; the values are the kernel's bits (fragmentStored, as Materialize computes them).
 /// storedAt: the value stored at tile-local pixel (x, y), inside the image.
-double storedAt(const Bins& bins, int tile, const DepthSetup& depth, const TileScratch& scratch, int x, int y);
+double storedAt(const Bins& bins, int tile, const DepthSetup& depth, const KeptTile& kept, int x, int y);
 /// anyFarther: whether some pixel of the tile-local rectangle [x0, x1] x [y0, y1] (non-empty,
 /// inside the image) stores a value farther than `stored` (a value of the depth format). The
 /// tile's and blocks' bounds answer first; pixels are read only where they cannot.
-bool anyFarther(const Bins& bins, int tile, const DepthSetup& depth, const TileScratch& scratch, int x0, int y0,
+bool anyFarther(const Bins& bins, int tile, const DepthSetup& depth, const KeptTile& kept, int x0, int y0,
                 int x1, int y1, double stored);
 
 /// What the kernel (tile_kernel-inl.h) needs for one tile (scratch and counters: rasterizing only).
