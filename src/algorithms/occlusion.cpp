@@ -106,9 +106,13 @@ const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, c
   parallelFor(0, size_t(workers), workers, [&](size_t worker) {
     const size_t part = currentPart();  // (tiles whose records this thread set up come first)
     tiled::TileScratch& scratch = im.state.scratch[worker];
-    for (size_t tile; (tile = im.state.tileWork.next(part)) < tiles;) {
+    for (size_t tile = im.state.tileWork.next(part); tile < tiles;) {
       tiled::rasterizeTile(bins, int(tile), im.depth, false, scratch, im.state.orders[worker], im.state.counters[tile]);
+      // The next tile is claimed before this one's streamed stores: claiming is a locked
+      // instruction, which waits until the streamed stores before it have drained.
+      const size_t following = im.state.tileWork.next(part);
       tiled::storeTile(scratch, im.depth, im.tiles[tile]);
+      tile = following;
     }
     tiled::finishResolves();
   });
