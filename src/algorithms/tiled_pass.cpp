@@ -39,7 +39,9 @@ bool deferClusters() {
 
 void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt, const DepthSetup& depth,
                  TiledState& state) {
-  tiled::prepareBins(state.bins, cam.width, cam.height, (scene.triangles.size() + kChunkTriangles - 1) / kChunkTriangles);
+  tiled::prepareBins(state.bins, cam.width, cam.height, 
+                     (scene.triangles.size() + chunkTrianglesFor(scene.triangles.size()) - 1) /
+                         chunkTrianglesFor(scene.triangles.size()));
   runFrontEnd(
       scene, cam, opt, state.fe,
       [&](size_t chunk) {

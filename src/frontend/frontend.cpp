@@ -547,14 +547,16 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
   const bool clusters = ((deferBackFaces && nearestFor) || options.cull == Cull::Back) && deferClusters &&
                         scene.clusters.size() == (nt + kClusterTriangles - 1) / kClusterTriangles;
   const ClusterView view = clusters ? clusterView(cam) : ClusterView{};
-  out.chunkCount = (nt + kChunkTriangles - 1) / kChunkTriangles;
+  out.chunkTriangles = chunkTrianglesFor(nt);
+  const size_t per = out.chunkTriangles;
+  out.chunkCount = (nt + per - 1) / per;
   if (out.chunks.size() < out.chunkCount) out.chunks.resize(out.chunkCount);
   parallelFor(0, out.chunkCount, threads, [&](size_t c) {
     FrontEndChunk& chunk = out.chunks[c];
     chunk.counters = FrontEndCounters{};
+    chunk.firstTriangle = uint32_t(c * per);
     setupRange(scene, cam, options, shade, out, nearestFor, deferBackFaces && nearestFor,
-               view.enabled ? &view : nullptr, c * kChunkTriangles,
-               std::min(nt, (c + 1) * kChunkTriangles), chunk);
+               view.enabled ? &view : nullptr, c * per, std::min(nt, (c + 1) * per), chunk);
     if (consumer) consumer(c);
   });
   for (size_t c = 0; c < out.chunkCount; ++c) out.add(out.chunks[c].counters);

@@ -117,10 +117,21 @@ struct FrontEndCounters {
 
 inline constexpr int kLargeBoxPixels = 64;
 
-/// Scene triangles per chunk of front-end work: fixed, so results never depend on the thread
-/// count; small enough that a chunk's set-up triangles (<= 7 pieces a triangle when clipped,
-/// mostly 1) stay in a core's L2 cache until they are binned.
+/// Scene triangles per chunk of front-end work, at most: small enough that a chunk's set-up
+/// triangles (<= 7 pieces a triangle when clipped, mostly 1) stay in a core's L2 cache until
+/// they are binned.
 inline constexpr size_t kChunkTriangles = 1 << 12;
+/// Scene triangles per chunk for a scene of `triangles`: kChunkTriangles, or fewer (down to 1024,
+/// a multiple of kClusterTriangles) so that a scene of under 64K triangles still has about 16
+/// chunks — a chunk is set up and binned by one thread, and 10,000 triangles in 3 chunks of
+/// 4096 kept one of two threads waiting a third of the time. A function of the scene only, never
+/// of the thread count: binning culls within a chunk, so the statistics would depend on it.
+inline size_t chunkTrianglesFor(size_t triangles) {
+  constexpr size_t kMinimum = 1024, kChunks = 16;
+  static_assert(kMinimum % kClusterTriangles == 0 && kChunkTriangles % kClusterTriangles == 0);
+  const size_t per = (triangles / kChunks + kClusterTriangles - 1) / kClusterTriangles * kClusterTriangles;
+  return std::clamp(per, kMinimum, kChunkTriangles);
+}
 
 /// A back face runFrontEnd(deferBackFaces = true) did not write a SetupTriangle for: what the
 /// tiled rasterizer needs to decide, from its tile's stored depths, whether it can show, and to
@@ -179,6 +190,7 @@ inline void prefetchForWriting(const SetupTriangle* first, size_t count) {
 
 /// The set-up triangles of one chunk of scene triangles, in submission order.
 struct FrontEndChunk {
+  uint32_t firstTriangle = 0;  // the scene index of its first triangle: chunk c holds [c k, c k + k), k = chunkTriangles
   SetupTriangles triangles;
   /// With runFrontEnd's deferBackFaces: the deferred back faces (not in `triangles`), in
   /// submission order (the records of those set up again are the tiled rasterizer's: Bins::late).
@@ -198,6 +210,7 @@ struct FrontEndOutput : FrontEndCounters {
   /// vector may hold more chunks from an earlier, larger frame: their memory is kept.)
   std::vector<FrontEndChunk> chunks;
   size_t chunkCount = 0;
+  size_t chunkTriangles = kChunkTriangles;  // scene triangles per chunk (chunkTrianglesFor)
 
   size_t triangleCount() const;
   /// Calls f(const SetupTriangle&) for every set-up triangle, in submission order.

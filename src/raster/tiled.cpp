@@ -254,7 +254,7 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
     throw std::logic_error("binChunk: the chunk has no nearest bounds (runFrontEnd without nearestFor)");
   bins.records[2 * chunk] = tris.data();
   const size_t n = tris.size(), tiles = size_t(bins.tileCount());
-  const uint32_t firstTriangle = uint32_t(chunk * kChunkTriangles);
+  const uint32_t firstTriangle = triangles.firstTriangle;
   cb.pairs.clear();
   cb.culled = 0;
   bool cull = false;
@@ -308,6 +308,7 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
   ChunkBins& cl = bins.clusters[chunk];
   const size_t k = clusters.size();
   cl.clusterList = clusters.data();
+  cl.firstTriangle = firstTriangle;
   cl.firstSlot = uint32_t(m);
   if (cl.setUpCapacity < k) {
     cl.setUp.reset(new std::atomic<uint8_t>[k]);
@@ -509,7 +510,7 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
   if (anyClusters)
     bins.forChunksOf(tile, [&](size_t c) {
       const ChunkBins& cl = bins.clusters[c];
-      const uint32_t firstTriangle = uint32_t(c * kChunkTriangles);
+      const uint32_t firstTriangle = cl.firstTriangle;
       for (uint32_t item = cl.start[size_t(tile)], end = cl.start[size_t(tile) + 1]; item < end; ++item) {
         if (boxHidden(cl.itemNearest[item], cl.itemBox[item])) {
           counters.culledTiles += kClusterTriangles;

@@ -119,6 +119,7 @@ struct ChunkBins {
   // 2 done): its surviving triangles' records go to Bins::late's RecordRoom, slots
   // clusterSlot(k) on, with their nearest bounds in slotNearest, and their number in survivors.
   const DeferredCluster* clusterList = nullptr;
+  uint32_t firstTriangle = 0;  // the chunk's first scene triangle (FrontEndChunk::firstTriangle)
   uint32_t firstSlot = 0;  // the chunk's deferred faces come first in the RecordRoom
   std::unique_ptr<std::atomic<uint8_t>[]> setUp;
   size_t setUpCapacity = 0;
