@@ -298,6 +298,41 @@ TEST(Tiled, PerTileChunkListsNameEveryChunkWithItemsThere) {
   EXPECT_EQ(walked(0).size(), fe.chunkCount);
 }
 
+// The front end's chunk size depends on the scene's triangle count alone (binning culls within a
+// chunk: the statistics must not depend on the thread count): whole clusters, 1024 to
+// kChunkTriangles triangles, and about 16 chunks for scenes of 16K to 64K triangles.
+TEST(Tiled, ChunkSizeFollowsTheSceneOnly) {
+  for (const size_t n : {size_t(0), size_t(1), size_t(1000), size_t(10000), size_t(16384), size_t(20000), size_t(43202),
+                         size_t(65536), size_t(1003520)}) {
+    const size_t k = chunkTrianglesFor(n);
+    EXPECT_EQ(k % kClusterTriangles, 0u) << n;
+    EXPECT_GE(k, 1024u) << n;
+    EXPECT_LE(k, kChunkTriangles) << n;
+    if (n >= 16 * 1024 && n <= 16 * kChunkTriangles) {
+      const size_t chunks = (n + k - 1) / k;
+      EXPECT_GE(chunks, 15u) << n;
+      EXPECT_LE(chunks, 16u) << n;
+    }
+  }
+  const Scene scene = loadScene("builtin:random?n=10000");
+  const Camera cam = resolveCamera(frameBounds(scene.bounds()), 320, 240, scene.bounds());
+  for (const int threads : {1, 2}) {
+    RenderOptions opt;
+    opt.threads = threads;
+    FrontEndOutput fe;
+    runFrontEnd(scene, cam, opt, fe, {});
+    EXPECT_EQ(fe.chunkTriangles, 1024u);
+    ASSERT_EQ(fe.chunkCount, 10u);
+    for (size_t c = 0; c < fe.chunkCount; ++c) {
+      EXPECT_EQ(fe.chunks[c].firstTriangle, c * 1024);
+      for (const SetupTriangle& t : fe.chunks[c].triangles) {
+        EXPECT_GE(t.triangle, c * 1024);
+        EXPECT_LT(t.triangle, (c + 1) * 1024);
+      }
+    }
+  }
+}
+
 // Binning chunk by chunk, in any order, gives per-tile lists that, read in chunk order, list
 // every triangle touching the tile once, in submission order; the nearest bounds do not depend
 // on the order either.
