@@ -39,9 +39,8 @@ bool deferClusters() {
 
 void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt, const DepthSetup& depth,
                  TiledState& state) {
-  tiled::prepareBins(state.bins, cam.width, cam.height, 
-                     (scene.triangles.size() + chunkTrianglesFor(scene.triangles.size()) - 1) /
-                         chunkTrianglesFor(scene.triangles.size()));
+  const size_t triangles = scene.triangles.size(), perChunk = chunkTrianglesFor(triangles);
+  tiled::prepareBins(state.bins, cam.width, cam.height, (triangles + perChunk - 1) / perChunk);
   runFrontEnd(
       scene, cam, opt, state.fe,
       [&](size_t chunk) {
