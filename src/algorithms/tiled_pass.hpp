@@ -15,8 +15,9 @@
 namespace hsr::algo {
 
 /// Everything the tiled path needs from frame to frame, kept by its owner so that a warm frame
-/// allocates nothing: the front end's output, the bins, the workers' tile scratch (the z-buffer
-/// only: the occlusion buffer keeps one tile per tile) and visit lists, the per-tile counters.
+/// allocates nothing: the front end's output, the bins, the workers' tile scratch (the occlusion
+/// buffer stores each tile from there into its own kept tiles) and visit lists, the per-tile
+/// counters.
 struct TiledState {
   FrontEndOutput fe;
   tiled::Bins bins;

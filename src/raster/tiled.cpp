@@ -665,10 +665,15 @@ void storeTile(const TileScratch& from, const DepthSetup& depth, KeptTile& to) {
 void loadTile(const KeptTile& from, const DepthSetup& depth, TileScratch& to) {
   static_cast<TileSummary&>(to) = from;
   if (from.state != TileState::Pixels) return;
+  constexpr int kBlocksX = kTileSize / kBlockSize;
   visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() {
-    for (int y = 0; y < kTileSize; ++y)
-      for (int x = 0; x < kTileSize; ++x)
-        to.depth[size_t(y) * kTileSize + size_t(x)] = keptStored<S>(from.depth[KeptTile::at(x, y)]);
+    for (int b = 0; b < kBlocksPerTile; ++b) {
+      if (from.blockKey[b] != 0 || from.blockClear[b]) continue;  // uniform: storeTile kept no values
+      const int bx = b % kBlocksX * kBlockSize, by = b / kBlocksX * kBlockSize;
+      for (int y = by; y < by + kBlockSize; ++y)
+        for (int x = bx; x < bx + kBlockSize; ++x)
+          to.depth[size_t(y) * kTileSize + size_t(x)] = keptStored<S>(from.depth[KeptTile::at(x, y)]);
+    }
   });
 }
 
