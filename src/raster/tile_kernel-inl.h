@@ -33,6 +33,7 @@
 #include <cstring>
 #include <limits>
 #include <stdexcept>
+#include <type_traits>
 
 #include "core/depth_map.hpp"
 #include "core/stream-inl.h"
@@ -622,7 +623,8 @@ void RasterizeTileT(const TileJob& job) {
         yLargest[i] = double(e[i].dx * ((e[i].dx > 0 ? bottom : top) - e[i].ay) - e[i].bias);
         ySmallest[i] = double(e[i].dx * ((e[i].dx > 0 ? top : bottom) - e[i].ay) - e[i].bias);
       }
-      uint64_t visit = 0, inside = 0;  // bit bx: the block is drawn; the triangle covers its part of the box
+      uint64_t visit = 0;  // bit bx: the block is drawn
+      uint64_t insideEdge[3] = {};  // bit bx: every centre of the block's part of the box is inside edge i
       double rowEdge[3];  // per edge: dx (py - ay) at the first row of the blocks' parts of the box
       for (int i = 0; i < 3; ++i) rowEdge[i] = double(e[i].dx * (top - e[i].ay));
       for (size_t k = 0; k < size_t(kBlocksX); k += N) {
@@ -641,16 +643,15 @@ void RasterizeTileT(const TileJob& job) {
           nearestIn = Farther<kGreater>(qNearV, r.nearest);
         }
         const Mask beaten = kIds ? Nearer<kGreater>(far, nearestIn) : hn::Not(Nearer<kGreater>(nearestIn, far));
-        Mask empty = hn::FirstN(d, 0), full = hn::FirstN(d, N);
+        Mask empty = hn::FirstN(d, 0);
+        uint8_t bits[4][8] = {};
         for (int i = 0; i < 3; ++i) {
           empty = hn::Or(empty, hn::Lt(hn::Set(d, yLargest[i]), xLargest[i][k / N]));
-          full = hn::And(full, hn::Ge(hn::Set(d, ySmallest[i]), xSmallest[i][k / N]));
+          hn::StoreMaskBits(d, hn::Ge(hn::Set(d, ySmallest[i]), xSmallest[i][k / N]), bits[1 + i]);
         }
-        uint8_t bits[2][8] = {};
         hn::StoreMaskBits(d, hn::AndNot(beaten, hn::AndNot(empty, inBox)), bits[0]);
-        hn::StoreMaskBits(d, full, bits[1]);
         visit |= uint64_t(bits[0][0]) << k;
-        inside |= uint64_t(bits[1][0]) << k;
+        for (int i = 0; i < 3; ++i) insideEdge[i] |= uint64_t(bits[1 + i][0]) << k;
         if constexpr (kCountBlocks) {
           count.blocksCulled += hn::CountTrue(d, hn::And(inBox, beaten));
           count.blocksEmpty += hn::CountTrue(d, hn::AndNot(beaten, hn::And(inBox, empty)));
@@ -659,7 +660,11 @@ void RasterizeTileT(const TileJob& job) {
       for (; visit; visit &= visit - 1) {
         const int bx = int(hwy::Num0BitsBelowLS1Bit_Nonzero64(visit));
         const int b = by * kBlocksX + bx;
-        const bool full = inside >> bx & 1;
+        // The edges that cross the block's part of the box (not every centre inside them): only
+        // those are tested in its rows; none when the triangle covers that part whole.
+        const unsigned crossing = unsigned(~insideEdge[0] >> bx & 1) | unsigned(~insideEdge[1] >> bx & 1) << 1 |
+                                  unsigned(~insideEdge[2] >> bx & 1) << 2;
+        const bool full = crossing == 0;
         const int cx0 = std::max(bx * kBlockSize, rx0), cx1 = std::min(bx * kBlockSize + kBlockSize - 1, rx1);
         if constexpr (kCountBlocks) ++(full ? count.blocksFull : count.blocksPartial);
         // A block the triangle covers whole (every pixel centre of the block, in the image):
@@ -726,11 +731,17 @@ void RasterizeTileT(const TileJob& job) {
         const V* columnIn = colIn[bx];
         const V* pX = colPX[bx];
         const V* qX = colQX[bx];
-        V edgeRow[3][kVectors];
-        if (!full)
-          for (int i = 0; i < 3; ++i)
-            for (size_t k = 0; k < size_t(kBlockSize); k += N)
-              edgeRow[i][k / N] = hn::Add(hn::Set(d, rowEdge[i]), colEdge[i][bx][k / N]);
+        // The crossing edges' functions at the block's first row, their steps and biases, packed.
+        V edgeRow[3][kVectors], edgeStep[3], edgeBias[3];
+        int edges = 0;
+        for (int i = 0; i < 3; ++i) {
+          if (!(crossing >> i & 1)) continue;
+          for (size_t k = 0; k < size_t(kBlockSize); k += N)
+            edgeRow[edges][k / N] = hn::Add(hn::Set(d, rowEdge[i]), colEdge[i][bx][k / N]);
+          edgeStep[edges] = stepYV[i];
+          edgeBias[edges] = biasV[i];
+          ++edges;
+        }
         // The block's farthest value after this triangle, gathered from the rows it visits.
         // The nearest value of the rows' in-image columns, per vector of a row (a lane is one
         // column): the nearest written, or a stored value no nearer than blockNear (a bound of
@@ -739,6 +750,9 @@ void RasterizeTileT(const TileJob& job) {
         V far = nearestV, nearest[kVectors];
         for (V& v : nearest) v = farthestV;
         Mask wrote = hn::FirstN(d, 0);
+        // The rows, compiled for each number of crossing edges (0 to 3).
+        auto drawRows = [&](auto edgeCount) {
+        constexpr int kEdges = decltype(edgeCount)::value;
         double Y = double(y0 + cy0) + 0.5;  // the row's centre, stepped (exact: integers + 0.5)
         for (int y = cy0; y <= cy1; ++y, Y += 1.0) {
           const V pY = hn::Set(d, m.p.b * Y);
@@ -747,11 +761,10 @@ void RasterizeTileT(const TileJob& job) {
             const V stored = hn::Load(d, s.depth + at);
             V result = stored;
             Mask cover = hn::MaskFromVec(columnIn[k / N]);
-            if (!full)
-              for (int i = 0; i < 3; ++i) {
-                cover = hn::And(cover, hn::Ge(edgeRow[i][k / N], biasV[i]));
-                edgeRow[i][k / N] = hn::Add(edgeRow[i][k / N], stepYV[i]);
-              }
+            for (int i = 0; i < kEdges; ++i) {
+              cover = hn::And(cover, hn::Ge(edgeRow[i][k / N], edgeBias[i]));
+              edgeRow[i][k / N] = hn::Add(edgeRow[i][k / N], edgeStep[i]);
+            }
             // Only pixels where something farther than the triangle's nearest value is stored
             // can change (counted as tested). The row is computed without branches either
             // way: a mispredicted branch costs more than the division it would save.
@@ -775,6 +788,13 @@ void RasterizeTileT(const TileJob& job) {
             wrote = hn::Or(wrote, win);
             far = Farther<kGreater>(far, result);
           }
+        }
+        };
+        switch (edges) {
+          case 0: drawRows(std::integral_constant<int, 0>()); break;
+          case 1: drawRows(std::integral_constant<int, 1>()); break;
+          case 2: drawRows(std::integral_constant<int, 2>()); break;
+          default: drawRows(std::integral_constant<int, 3>()); break;
         }
         if (!hn::AllFalse(d, wrote)) {
           // The block's rows outside the triangle's box kept their values.
