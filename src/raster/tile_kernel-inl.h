@@ -41,6 +41,12 @@
 #include "raster/edge.hpp"
 #include "raster/tiled.hpp"
 
+// For the kernel's lambdas that must not become calls: made calls, their captures live in
+// memory (random --occlusion --cull back took 1.4x the time).
+#ifndef HSR_ALWAYS_INLINE
+#define HSR_ALWAYS_INLINE __attribute__((always_inline))
+#endif
+
 HWY_BEFORE_NAMESPACE();
 namespace hsr::tiled {
 namespace HWY_NAMESPACE {
@@ -196,6 +202,7 @@ struct TileFrame : TileRect {
   double clear;           // the format's clear value, as stored
   double nearestPossible; // stored in cells outside the image: never drawn, never the farthest
   double farthestPossible;
+  double storedOne;       // the stored value of mapped depth 1 (that of 0 is 0)
 };
 
 template <DepthStorage S, DepthMapping M>
@@ -207,6 +214,7 @@ TileFrame MakeTileFrame(const TileJob& job) {
   constexpr double inf = std::numeric_limits<double>::infinity();
   f.nearestPossible = kGreater ? inf : -inf;
   f.farthestPossible = kGreater ? -inf : inf;
+  f.storedOne = double(quantizeDepth<S>(1.0));
   return f;
 }
 
@@ -553,6 +561,7 @@ void RasterizeTileT(const TileJob& job) {
       biasV[i] = hn::Set(d, double(e[i].bias));
     }
     const V qNearV = hn::Set(d, qNear);
+    const V pC = hn::Set(d, m.p.c);
     const auto idV = hn::Set(du, key);
     // A triangle parallel to the image plane has both planes constant (a = b = 0): a*X and
     // b*Y are zeros of a fixed sign, so every pixel computes the same bits as its first one.
@@ -750,52 +759,64 @@ void RasterizeTileT(const TileJob& job) {
         V far = nearestV, nearest[kVectors];
         for (V& v : nearest) v = farthestV;
         Mask wrote = hn::FirstN(d, 0);
-        // The rows, compiled for each number of crossing edges (0 to 3).
-        auto drawRows = [&](auto edgeCount) {
-        constexpr int kEdges = decltype(edgeCount)::value;
-        double Y = double(y0 + cy0) + 0.5;  // the row's centre, stepped (exact: integers + 0.5)
-        for (int y = cy0; y <= cy1; ++y, Y += 1.0) {
-          const V pY = hn::Set(d, m.p.b * Y);
-          for (size_t k = 0; k < size_t(kBlockSize); k += N) {
-            const size_t at = size_t(y) * kTileSize + size_t(bxPixel) + k;
-            const V stored = hn::Load(d, s.depth + at);
-            V result = stored;
-            Mask cover = hn::MaskFromVec(columnIn[k / N]);
-            for (int i = 0; i < kEdges; ++i) {
-              cover = hn::And(cover, hn::Ge(edgeRow[i][k / N], edgeBias[i]));
-              edgeRow[i][k / N] = hn::Add(edgeRow[i][k / N], edgeStep[i]);
+        // The rows, compiled for each number of crossing edges (0 to 3), and without the clamp
+        // when the depth is affine and its bounds over the block's part of the box lie strictly
+        // between the stored values of 0 and 1 (clamping changes nothing there: the same bits).
+        // Random --occlusion --cull back 1.05x for the edges, 1.03x more for the clamp.
+        const bool unclamped = rectBounds && !constantDepth && std::min(rectNearest[bx], rectFarthest[bx]) > 0 &&
+                               std::max(rectNearest[bx], rectFarthest[bx]) < tf.storedOne;
+        auto drawRows = [&](auto edgeCount, auto unclampedTag) HSR_ALWAYS_INLINE {
+          constexpr int kEdges = decltype(edgeCount)::value;
+          constexpr bool kUnclamped = decltype(unclampedTag)::value;
+          double Y = double(y0 + cy0) + 0.5;  // the row's centre, stepped (exact: integers + 0.5)
+          for (int y = cy0; y <= cy1; ++y, Y += 1.0) {
+            const V pY = hn::Set(d, m.p.b * Y);
+            for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+              const size_t at = size_t(y) * kTileSize + size_t(bxPixel) + k;
+              const V stored = hn::Load(d, s.depth + at);
+              V result = stored;
+              Mask cover = hn::MaskFromVec(columnIn[k / N]);
+              for (int i = 0; i < kEdges; ++i) {
+                cover = hn::And(cover, hn::Ge(edgeRow[i][k / N], edgeBias[i]));
+                edgeRow[i][k / N] = hn::Add(edgeRow[i][k / N], edgeStep[i]);
+              }
+              // Only pixels where something farther than the triangle's nearest value is stored
+              // can change (counted as tested). The row is computed without branches either
+              // way: a mispredicted branch costs more than the division it would save.
+              const Mask maybe = hn::And(cover, kIds ? NotFarther<kGreater>(qNearV, stored) : Nearer<kGreater>(qNearV, stored));
+              // Pixel centres X = x + 0.5; depth = P(X, Y) / Q(X, Y) (raster/fragment_depth.hpp).
+              const V z = kUnclamped       ? Quantize<S>(hn::Add(hn::Add(pX[k / N], pY), pC))
+                          : constantDepth ? zConstant
+                                          : StoredDepthAt<S>(m, pX[k / N], pY, qX[k / N], Y);
+              Mask win = hn::And(maybe, Nearer<kGreater>(z, stored));
+              if constexpr (kIds) {  // a tie goes to the triangle submitted first
+                const auto old = hn::Load(du, s.triangle + at);
+                const Mask tie = hn::And(hn::Eq(z, stored), hn::RebindMask(d, hn::Lt(hn::BitCast(di, idV), hn::BitCast(di, old))));
+                win = hn::Or(win, hn::And(maybe, tie));
+                hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
+              }
+              rowTests = hn::IfThenElse(hn::RebindMask(du, maybe), hn::Add(rowTests, oneU), rowTests);
+              rowWrites = hn::IfThenElse(hn::RebindMask(du, win), hn::Add(rowWrites, oneU), rowWrites);
+              if constexpr (kCountBlocks)
+                rowCovered = hn::IfThenElse(hn::RebindMask(du, cover), hn::Add(rowCovered, oneU), rowCovered);
+              result = hn::IfThenElse(win, z, stored);
+              hn::Store(result, d, s.depth + at);
+              nearest[k / N] = NearerOf<kGreater>(nearest[k / N], result);
+              wrote = hn::Or(wrote, win);
+              far = Farther<kGreater>(far, result);
             }
-            // Only pixels where something farther than the triangle's nearest value is stored
-            // can change (counted as tested). The row is computed without branches either
-            // way: a mispredicted branch costs more than the division it would save.
-            const Mask maybe = hn::And(cover, kIds ? NotFarther<kGreater>(qNearV, stored) : Nearer<kGreater>(qNearV, stored));
-            // Pixel centres X = x + 0.5; depth = P(X, Y) / Q(X, Y) (raster/fragment_depth.hpp).
-            const V z = constantDepth ? zConstant : StoredDepthAt<S>(m, pX[k / N], pY, qX[k / N], Y);
-            Mask win = hn::And(maybe, Nearer<kGreater>(z, stored));
-            if constexpr (kIds) {  // a tie goes to the triangle submitted first
-              const auto old = hn::Load(du, s.triangle + at);
-              const Mask tie = hn::And(hn::Eq(z, stored), hn::RebindMask(d, hn::Lt(hn::BitCast(di, idV), hn::BitCast(di, old))));
-              win = hn::Or(win, hn::And(maybe, tie));
-              hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
-            }
-            rowTests = hn::IfThenElse(hn::RebindMask(du, maybe), hn::Add(rowTests, oneU), rowTests);
-            rowWrites = hn::IfThenElse(hn::RebindMask(du, win), hn::Add(rowWrites, oneU), rowWrites);
-            if constexpr (kCountBlocks)
-              rowCovered = hn::IfThenElse(hn::RebindMask(du, cover), hn::Add(rowCovered, oneU), rowCovered);
-            result = hn::IfThenElse(win, z, stored);
-            hn::Store(result, d, s.depth + at);
-            nearest[k / N] = NearerOf<kGreater>(nearest[k / N], result);
-            wrote = hn::Or(wrote, win);
-            far = Farther<kGreater>(far, result);
           }
-        }
         };
-        switch (edges) {
-          case 0: drawRows(std::integral_constant<int, 0>()); break;
-          case 1: drawRows(std::integral_constant<int, 1>()); break;
-          case 2: drawRows(std::integral_constant<int, 2>()); break;
-          default: drawRows(std::integral_constant<int, 3>()); break;
-        }
+        auto drawRowsFor = [&](auto unclampedTag) HSR_ALWAYS_INLINE {
+          switch (edges) {
+            case 0: drawRows(std::integral_constant<int, 0>(), unclampedTag); break;
+            case 1: drawRows(std::integral_constant<int, 1>(), unclampedTag); break;
+            case 2: drawRows(std::integral_constant<int, 2>(), unclampedTag); break;
+            default: drawRows(std::integral_constant<int, 3>(), unclampedTag); break;
+          }
+        };
+        if (unclamped) drawRowsFor(std::true_type());
+        else drawRowsFor(std::false_type());
         if (!hn::AllFalse(d, wrote)) {
           // The block's rows outside the triangle's box kept their values.
           for (int y = by * kBlockSize; y < (by + 1) * kBlockSize; ++y) {
