@@ -102,7 +102,6 @@ void BM_RasterTiles(benchmark::State& state) {
   state.counters["blocks_full"] = double(counters.blocksFull);
   state.counters["blocks_partial"] = double(counters.blocksPartial);
   state.counters["blocks_culled"] = double(counters.blocksCulled);
-  state.counters["pixels_culled"] = double(counters.pixelsCulled);
   state.counters["tiles_whole"] = double(counters.tilesWhole);
   state.counters["blocks_whole"] = double(counters.blocksWhole);
 }

@@ -90,7 +90,8 @@ void tiledStats(Stats& st, const FrontEndOutput& fe, const tiled::Bins* bins, co
   // Triangle-tile pairs skipped because the triangle lies behind all the tile holds: when
   // binned (behind a triangle covering the tile) or when the tile was rasterized.
   st.culled_occlusion = counters.culledTiles + (bins ? bins->culled() : 0);
-  // Only fragments not rejected early by a tile, block or row bound are compared.
+  // Only fragments not rejected early by a tile or block bound (or, pixel by pixel, the
+  // triangle's nearest bound) are compared.
   st.depth_tests = counters.depthTests;
   st.depth_writes = counters.depthWrites;
   if (bins) {

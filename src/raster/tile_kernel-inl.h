@@ -347,8 +347,8 @@ void RasterizeTileT(const TileJob& job) {
   RasterCounters count;  // added to the job's at the end
   uint64_t tests = 0, writes = 0;  // the hottest counts, plain locals so they stay in registers
   // The row loop's counts, per lane (summed at the end): a masked add per row instead of
-  // popcounts. covered: pixels of the triangle visited there, tested or not.
-  hn::Vec<DU> rowTests = hn::Zero(du), rowWrites = hn::Zero(du), rowCovered = hn::Zero(du);
+  // popcounts.
+  hn::Vec<DU> rowTests = hn::Zero(du), rowWrites = hn::Zero(du);
   const hn::Vec<DU> oneU = hn::Set(du, 1);
   const Bins& bins = *job.bins;
   const TileFrame tf = MakeTileFrame<S, M>(job);
@@ -783,25 +783,25 @@ void RasterizeTileT(const TileJob& job) {
                 cover = hn::And(cover, hn::Ge(edgeRow[i][k / N], edgeBias[i]));
                 edgeRow[i][k / N] = hn::Add(edgeRow[i][k / N], edgeStep[i]);
               }
-              // Only pixels where something farther than the triangle's nearest value is stored
-              // can change (counted as tested). The row is computed without branches either
-              // way: a mispredicted branch costs more than the division it would save.
-              const Mask maybe = hn::And(cover, kIds ? NotFarther<kGreater>(qNearV, stored) : Nearer<kGreater>(qNearV, stored));
+              // Every covered pixel's depth is computed and compared (counted as tested): the
+              // row has no branches, a mispredicted one costs more than the division it would
+              // save. (No fragment is nearer than the triangle's bound qNear, so a first test of
+              // the stored values against qNear rejects none that wins or ties: it only counted
+              // fewer tests, at two more operations a row; without it random and city
+              // --occlusion --cull back 1.02x.)
               // Pixel centres X = x + 0.5; depth = P(X, Y) / Q(X, Y) (raster/fragment_depth.hpp).
               const V z = kUnclamped       ? Quantize<S>(hn::Add(hn::Add(pX[k / N], pY), pC))
                           : constantDepth ? zConstant
                                           : StoredDepthAt<S>(m, pX[k / N], pY, qX[k / N], Y);
-              Mask win = hn::And(maybe, Nearer<kGreater>(z, stored));
+              Mask win = hn::And(cover, Nearer<kGreater>(z, stored));
               if constexpr (kIds) {  // a tie goes to the triangle submitted first
                 const auto old = hn::Load(du, s.triangle + at);
                 const Mask tie = hn::And(hn::Eq(z, stored), hn::RebindMask(d, hn::Lt(hn::BitCast(di, idV), hn::BitCast(di, old))));
-                win = hn::Or(win, hn::And(maybe, tie));
+                win = hn::Or(win, hn::And(cover, tie));
                 hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
               }
-              rowTests = hn::IfThenElse(hn::RebindMask(du, maybe), hn::Add(rowTests, oneU), rowTests);
+              rowTests = hn::IfThenElse(hn::RebindMask(du, cover), hn::Add(rowTests, oneU), rowTests);
               rowWrites = hn::IfThenElse(hn::RebindMask(du, win), hn::Add(rowWrites, oneU), rowWrites);
-              if constexpr (kCountBlocks)
-                rowCovered = hn::IfThenElse(hn::RebindMask(du, cover), hn::Add(rowCovered, oneU), rowCovered);
               result = hn::IfThenElse(win, z, stored);
               hn::Store(result, d, s.depth + at);
               if constexpr (!kUnclamped) nearest[k / N] = NearerOf<kGreater>(nearest[k / N], result);
@@ -851,10 +851,8 @@ void RasterizeTileT(const TileJob& job) {
     if (dirtyBlocks) refreshDirty();
     if (s.tileFarStale) refreshTileFar();
   }
-  const uint64_t testedInRows = hn::GetLane(hn::SumOfLanes(du, rowTests));
-  count.depthTests = tests + testedInRows;
+  count.depthTests = tests + hn::GetLane(hn::SumOfLanes(du, rowTests));
   count.depthWrites = writes + hn::GetLane(hn::SumOfLanes(du, rowWrites));
-  if constexpr (kCountBlocks) count.pixelsCulled = hn::GetLane(hn::SumOfLanes(du, rowCovered)) - testedInRows;
   job.counters->add(count);
 }
 

@@ -93,7 +93,6 @@ void RasterCounters::add(const RasterCounters& o) {
   blocksPartial += o.blocksPartial;
   blocksFull += o.blocksFull;
   blocksCulled += o.blocksCulled;
-  pixelsCulled += o.pixelsCulled;
   tilesWhole += o.tilesWhole;
   blocksWhole += o.blocksWhole;
 }

@@ -44,7 +44,7 @@
 #include "core/shading.hpp"
 #include "frontend/frontend.hpp"
 
-// Block counters of the kernel (RasterCounters::blocks*, pixelsCulled), on unless built with
+// Block counters of the kernel (RasterCounters::blocks*), on unless built with
 // -DHSR_RASTER_COUNTERS=0.
 #ifndef HSR_RASTER_COUNTERS
 #define HSR_RASTER_COUNTERS 1
@@ -210,7 +210,6 @@ struct RasterCounters {
   // Blocks (8x8) met by the kernel; counted only when kCountBlocks.
   uint64_t blocksEmpty = 0, blocksPartial = 0, blocksFull = 0;
   uint64_t blocksCulled = 0;  // skipped: the triangle is behind everything stored in the block
-  uint64_t pixelsCulled = 0;  // covered pixels of the row loop not tested: nothing stored there is farther
   uint64_t tilesWhole = 0;    // triangle-tile pairs applied as a whole-tile plane (every pixel won)
   uint64_t blocksWhole = 0;   // triangle-block pairs applied as a whole-block plane
   void add(const RasterCounters& o);
