@@ -123,11 +123,13 @@ HWY_INLINE V StoredDepth(const MappedPlanes& m, V X, double Y) {
 }
 
 // StoredDepth with a X of both planes given (pX = m.p.a X, qX = m.q.a X, as StoredDepth computes
-// them) and P's b Y broadcast (pY): the same bits.
-template <DepthStorage S>
+// them) and P's b Y broadcast (pY): the same bits. kUnclamped: m is affine and every p lies
+// strictly within (0, 1), so the clamp, the identity there, is left out.
+template <DepthStorage S, bool kUnclamped = false>
 HWY_INLINE V StoredDepthAt(const MappedPlanes& m, V pX, V pY, V qX, double Y) {
   const D d;
   const V p = hn::Add(hn::Add(pX, pY), hn::Set(d, m.p.c));
+  if constexpr (kUnclamped) return Quantize<S>(p);
   if (m.affine) return Quantize<S>(Clamp01(p));  // q = 1: p / q is p
   const V q = hn::Add(hn::Add(qX, hn::Set(d, m.q.b * Y)), hn::Set(d, m.q.c));
   return Quantize<S>(Clamp01(hn::Div(p, q)));
@@ -561,7 +563,6 @@ void RasterizeTileT(const TileJob& job) {
       biasV[i] = hn::Set(d, double(e[i].bias));
     }
     const V qNearV = hn::Set(d, qNear);
-    const V pC = hn::Set(d, m.p.c);
     const auto idV = hn::Set(du, key);
     // A triangle parallel to the image plane has both planes constant (a = b = 0): a*X and
     // b*Y are zeros of a fixed sign, so every pixel computes the same bits as its first one.
@@ -790,9 +791,8 @@ void RasterizeTileT(const TileJob& job) {
               // fewer tests, at two more operations a row; without it random and city
               // --occlusion --cull back 1.02x.)
               // Pixel centres X = x + 0.5; depth = P(X, Y) / Q(X, Y) (raster/fragment_depth.hpp).
-              const V z = kUnclamped       ? Quantize<S>(hn::Add(hn::Add(pX[k / N], pY), pC))
-                          : constantDepth ? zConstant
-                                          : StoredDepthAt<S>(m, pX[k / N], pY, qX[k / N], Y);
+              const V z = constantDepth && !kUnclamped ? zConstant
+                                                       : StoredDepthAt<S, kUnclamped>(m, pX[k / N], pY, qX[k / N], Y);
               Mask win = hn::And(cover, Nearer<kGreater>(z, stored));
               if constexpr (kIds) {  // a tie goes to the triangle submitted first
                 const auto old = hn::Load(du, s.triangle + at);
