@@ -150,7 +150,7 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     const size_t lanes = std::min(N, count - first);
     // Each vertex's fields (ProjectedVertex: sx, sy, num, den; 4 x 8 bytes), and snap
     // (snapCoordinate: an integer below 2^23, the same in double as in int64).
-#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
     // Each lane's vertex indices: the batch's own lists, or (a last, partial batch) its last
     // triangle's repeated.
     uint32_t padded[3][kSetupBatch];
@@ -172,17 +172,22 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     const V subpixel = hn::Set(d, double(kSubpixelOne)), halfUnit = hn::Set(d, 0.5);
     V sx[3], sy[3], X[3], Y[3], num[3], den[3];
     for (int k = 0; k < 3; ++k) {
-#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
-      // 8 lanes (AVX-512): each vertex loaded whole (4 doubles, one 32-byte load) and each group
-      // of 4 transposed, rather than 4 gathers of 8 (sphere frames 0.95-0.97 of the time on Zen 5).
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
+      // Each vertex loaded whole (4 doubles, one 32-byte load) and each group of 4 transposed,
+      // rather than 4 gathers: AVX-512 (8 lanes, two groups) sphere frames 0.95-0.97 of the time
+      // on Zen 5; AVX2 (4 lanes, one group) sphere --depth-only frames 0.94 of the time on an
+      // AMD EPYC without AVX-512.
       static_assert(kSetupBatch == 8);
-      const hn::Half<D> h;
-      using H = hn::Vec<decltype(h)>;
-      H v[8];
-      for (int j = 0; j < 8; ++j) v[j] = hn::LoadU(h, base + size_t(index[k][j]) * (sizeof(ProjectedVertex) / 8));
-      H field[4][2];  // sx, sy, num, den; lanes 0-3 and 4-7
-      for (int g = 0; g < 2; ++g) {
-        const H* q = v + 4 * g;
+      using H4 = hn::CappedTag<double, 4>;  // one vertex's 4 fields
+      const H4 h;
+      using H = hn::Vec<H4>;
+      constexpr int kGroups = int(hn::MaxLanes(D())) / 4;
+      static_assert(kGroups == 1 || kGroups == 2);
+      H field[4][kGroups];  // sx, sy, num, den; lanes 0-3 (and 4-7)
+      for (int g = 0; g < kGroups; ++g) {
+        H q[4];
+        for (int j = 0; j < 4; ++j)
+          q[j] = hn::LoadU(h, base + size_t(index[k][4 * g + j]) * (sizeof(ProjectedVertex) / 8));
         const H l01 = hn::InterleaveLower(h, q[0], q[1]), u01 = hn::InterleaveUpper(h, q[0], q[1]);  // sx sx n n / sy sy d d
         const H l23 = hn::InterleaveLower(h, q[2], q[3]), u23 = hn::InterleaveUpper(h, q[2], q[3]);
         field[0][g] = hn::ConcatLowerLower(h, l23, l01);
@@ -190,10 +195,14 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
         field[2][g] = hn::ConcatUpperUpper(h, l23, l01);
         field[3][g] = hn::ConcatUpperUpper(h, u23, u01);
       }
+#if HWY_TARGET <= HWY_AVX3
       sx[k] = hn::Combine(d, field[0][1], field[0][0]);
       sy[k] = hn::Combine(d, field[1][1], field[1][0]);
       num[k] = hn::Combine(d, field[2][1], field[2][0]);
       den[k] = hn::Combine(d, field[3][1], field[3][0]);
+#else
+      sx[k] = field[0][0], sy[k] = field[1][0], num[k] = field[2][0], den[k] = field[3][0];
+#endif
 #else
       const auto idx = hn::Load(hn::Rebind<int64_t, D>(), offset[k]);
       sx[k] = hn::GatherIndex(d, base + 0, idx);
