@@ -60,6 +60,19 @@ using V = hn::Vec<D>;
 using Mask = hn::Mask<D>;
 using DU = hn::RebindToUnsigned<D>;           // triangle ids, same lane count and size
 
+// acc + 1 in the lanes of m (the rows' per-lane counts): one masked add with AVX-512's mask
+// registers; elsewhere masks are vectors of all-ones (-1) lanes, and subtracting one is one
+// operation instead of an add and a blend. The rows wrote when a lane of rowWrites moved (no
+// mask gathered per row). Random --occlusion --cull back 1.05x, city 1.03x on AVX2.
+HWY_INLINE hn::Vec<DU> CountIn(hn::Vec<DU> acc, Mask m) {
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+  const DU du;
+  return hn::IfThenElse(hn::RebindMask(du, m), hn::Add(acc, hn::Set(du, 1)), acc);
+#else
+  return hn::Sub(acc, hn::BitCast(DU(), hn::VecFromMask(D(), m)));
+#endif
+}
+
 // "a is nearer than b" for the format's compare direction.
 template <bool kGreater>
 HWY_INLINE Mask Nearer(V a, V b) {
@@ -348,10 +361,8 @@ void RasterizeTileT(const TileJob& job) {
   TileScratch& s = *job.scratch;
   RasterCounters count;  // added to the job's at the end
   uint64_t tests = 0, writes = 0;  // the hottest counts, plain locals so they stay in registers
-  // The row loop's counts, per lane (summed at the end): a masked add per row instead of
-  // popcounts.
+  // The row loop's counts, per lane (summed at the end): CountIn per row instead of popcounts.
   hn::Vec<DU> rowTests = hn::Zero(du), rowWrites = hn::Zero(du);
-  const hn::Vec<DU> oneU = hn::Set(du, 1);
   const Bins& bins = *job.bins;
   const TileFrame tf = MakeTileFrame<S, M>(job);
   const int x0 = tf.x0, y0 = tf.y0, w = tf.w, h = tf.h;
@@ -762,7 +773,7 @@ void RasterizeTileT(const TileJob& job) {
         // (random --occlusion --cull back 1.03x; the same planes on the peer scenes).
         V far = nearestV, nearest[kVectors];
         for (V& v : nearest) v = farthestV;
-        Mask wrote = hn::FirstN(d, 0);
+        const hn::Vec<DU> writesBefore = rowWrites;  // (the rows wrote when a lane's count moved)
         // The rows, compiled for each number of crossing edges (0 to 3), and without the clamp
         // when the depth is affine and its bounds over the block's part of the box lie strictly
         // between the stored values of 0 and 1 (clamping changes nothing there: the same bits).
@@ -800,12 +811,11 @@ void RasterizeTileT(const TileJob& job) {
                 win = hn::Or(win, hn::And(cover, tie));
                 hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
               }
-              rowTests = hn::IfThenElse(hn::RebindMask(du, cover), hn::Add(rowTests, oneU), rowTests);
-              rowWrites = hn::IfThenElse(hn::RebindMask(du, win), hn::Add(rowWrites, oneU), rowWrites);
+              rowTests = CountIn(rowTests, cover);
+              rowWrites = CountIn(rowWrites, win);
               result = hn::IfThenElse(win, z, stored);
               hn::Store(result, d, s.depth + at);
               if constexpr (!kUnclamped) nearest[k / N] = NearerOf<kGreater>(nearest[k / N], result);
-              wrote = hn::Or(wrote, win);
               far = Farther<kGreater>(far, result);
             }
           }
@@ -820,7 +830,7 @@ void RasterizeTileT(const TileJob& job) {
         };
         if (unclamped) drawRowsFor(std::true_type());
         else drawRowsFor(std::false_type());
-        if (!hn::AllFalse(d, wrote)) {
+        if (!hn::AllTrue(du, hn::Eq(rowWrites, writesBefore))) {
           // The block's rows outside the triangle's box kept their values.
           for (int y = by * kBlockSize; y < (by + 1) * kBlockSize; ++y) {
             if (y == cy0) y = cy1 + 1;
