@@ -333,7 +333,8 @@ TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
   for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
     hwy::SetSupportedTargetsForTest(target);
     ++targets;
-    for (Cull cull : {Cull::None, Cull::Back, Cull::Front}) {
+    for (Cull cull : {Cull::None, Cull::Back, Cull::Front})
+    for (bool cullFirst : {false, true}) {
       FrontEndCounters scalarCounts, batchCounts;
       size_t listed = 0;
       std::vector<SetupTriangle> scalar, batch(tri.size());
@@ -344,8 +345,9 @@ TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
       }
       const uint32_t* vertex[3] = {index[0].data(), index[1].data(), index[2].data()};
       batch.resize(setupBatch(vertices.data(), vertex, tri.data(), face.data(), tri.size(), cam, cull, batchCounts,
-                              batch.data()));
-      const std::string what = std::string(hwy::TargetName(target)) + " cull " + std::to_string(int(cull));
+                              batch.data(), nullptr, nullptr, nullptr, nullptr, cullFirst));
+      const std::string what = std::string(hwy::TargetName(target)) + " cull " + std::to_string(int(cull)) +
+                               (cullFirst ? " facing test first" : "");
       ASSERT_EQ(scalar.size(), batch.size()) << what;
       for (size_t i = 0; i < scalar.size(); ++i) {
         scalar[i].color = batch[i].color = Rgba8{};  // shaded by the caller

@@ -380,6 +380,7 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
   double batchNearest[kBatch];
   DeferredFace batchDeferred[kBatch];
   size_t batched = 0;
+  bool cullFirst = false;  // see flush
   auto keep = [&](const SetupTriangle& t, double nearest) {
     if (out.triangles.size() + 48 < out.triangles.capacity())
       __builtin_prefetch(out.triangles.data() + out.triangles.size() + 48, 1, 3);
@@ -394,8 +395,15 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
     const size_t first = out.triangles.size();
     out.triangles.resize(first + batched);
     SetupTriangle* kept = out.triangles.data() + first;
+    const uint64_t culledBefore = counters.culledBackface;
     const size_t n = setupBatch(fe.projected.data(), vertex, batchTriangle, batchFace, batched, cam, options.cull,
-                                counters, kept, depth, batchNearest, defer ? batchDeferred : nullptr, &deferred);
+                                counters, kept, depth, batchNearest, defer ? batchDeferred : nullptr, &deferred,
+                                cullFirst);
+    // With a cull, the facing test first for the next batch when at least a quarter of this one
+    // was culled (neighbouring triangles mostly face alike). On AVX2, --occlusion --cull back:
+    // city 1.04x, sphere 1.01x (whose set-up meets few back faces: its back-facing clusters
+    // are culled whole; the test first for every batch made it 0.98x).
+    cullFirst = (counters.culledBackface - culledBefore) * 4 >= batched;
     out.triangles.resize(first + n);
     // The next batch's lines, for writing (cold: last written a frame ago).
     if (first + n + 2 * kBatch <= out.triangles.capacity()) prefetchForWriting(kept + n, kBatch);

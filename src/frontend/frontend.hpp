@@ -275,10 +275,13 @@ inline constexpr size_t kSetupBatch = 8;
 /// With `depth`, also nearest[0, n): nearestStored(out[i], *depth), bit for bit.
 /// With `deferred` (and `depth`), the back faces whose pixel box lies in one kDeferTile square
 /// go to deferred[0, *deferredCount) as DeferredFaces instead (in order; not counted in n).
+/// With `cullFirst` (and a cull), the facing test runs over all of them first and only the
+/// triangles it keeps are set up: faster when many are culled, slower when few are; the output
+/// is the same.
 size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
                   const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
                   SetupTriangle* out, const DepthSetup* depth = nullptr, double* nearest = nullptr,
-                  DeferredFace* deferred = nullptr, size_t* deferredCount = nullptr);
+                  DeferredFace* deferred = nullptr, size_t* deferredCount = nullptr, bool cullFirst = false);
 
 /// Runs the front end over all scene triangles, in order, on up to options.threads threads; the
 /// work is split into fixed chunks, so the output never depends on the thread count.

@@ -137,7 +137,97 @@ HWY_INLINE V NearestStored(const DepthSetup& depth, const PlaneV& N, const Plane
   return hn::IfThenElse(bounded, v, hn::Set(d, greater ? inf : -inf));
 }
 
-size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
+// The fields of the three vertices (ProjectedVertex: sx, sy, num, den; 4 x 8 bytes) of the
+// triangles [first, first + lanes) of the lists `vertex`, lane by lane (a last, partial vector
+// repeats its last triangle).
+HWY_INLINE void LoadVertices(const ProjectedVertex* projected, const uint32_t* const* vertex, size_t first,
+                             size_t lanes, V* sx, V* sy, V* num, V* den) {
+  const D d;
+  const size_t N = hn::Lanes(d);
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
+  // Each lane's vertex indices: the batch's own lists, or (a last, partial batch) its last
+  // triangle's repeated.
+  uint32_t padded[3][kSetupBatch];
+  const uint32_t* index[3];
+  for (int k = 0; k < 3; ++k) {
+    index[k] = vertex[k] + first;
+    if (lanes < N) {
+      for (size_t j = 0; j < N; ++j) padded[k][j] = vertex[k][first + std::min(j, lanes - 1)];
+      index[k] = padded[k];
+    }
+  }
+#else
+  HWY_ALIGN int64_t offset[3][kSetupBatch];
+  for (int k = 0; k < 3; ++k)
+    for (size_t j = 0; j < N; ++j)
+      offset[k][j] = int64_t(vertex[k][first + std::min(j, lanes - 1)]) * int64_t(sizeof(ProjectedVertex) / 8);
+#endif
+  const double* base = reinterpret_cast<const double*>(projected);
+  for (int k = 0; k < 3; ++k) {
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
+    // Each vertex loaded whole (4 doubles, one 32-byte load) and each group of 4 transposed,
+    // rather than 4 gathers: AVX-512 (8 lanes, two groups) sphere frames 0.95-0.97 of the time
+    // on Zen 5; AVX2 (4 lanes, one group) sphere --depth-only frames 0.94 of the time on an
+    // AMD EPYC without AVX-512.
+    static_assert(kSetupBatch == 8);
+    using H4 = hn::CappedTag<double, 4>;  // one vertex's 4 fields
+    const H4 h;
+    using H = hn::Vec<H4>;
+    constexpr int kGroups = int(hn::MaxLanes(D())) / 4;
+    static_assert(kGroups == 1 || kGroups == 2);
+    H field[4][kGroups];  // sx, sy, num, den; lanes 0-3 (and 4-7)
+    for (int g = 0; g < kGroups; ++g) {
+      H q[4];
+      for (int j = 0; j < 4; ++j)
+        q[j] = hn::LoadU(h, base + size_t(index[k][4 * g + j]) * (sizeof(ProjectedVertex) / 8));
+      const H l01 = hn::InterleaveLower(h, q[0], q[1]), u01 = hn::InterleaveUpper(h, q[0], q[1]);  // sx sx n n / sy sy d d
+      const H l23 = hn::InterleaveLower(h, q[2], q[3]), u23 = hn::InterleaveUpper(h, q[2], q[3]);
+      field[0][g] = hn::ConcatLowerLower(h, l23, l01);
+      field[1][g] = hn::ConcatLowerLower(h, u23, u01);
+      field[2][g] = hn::ConcatUpperUpper(h, l23, l01);
+      field[3][g] = hn::ConcatUpperUpper(h, u23, u01);
+    }
+#if HWY_TARGET <= HWY_AVX3
+    sx[k] = hn::Combine(d, field[0][1], field[0][0]);
+    sy[k] = hn::Combine(d, field[1][1], field[1][0]);
+    num[k] = hn::Combine(d, field[2][1], field[2][0]);
+    den[k] = hn::Combine(d, field[3][1], field[3][0]);
+#else
+    sx[k] = field[0][0], sy[k] = field[1][0], num[k] = field[2][0], den[k] = field[3][0];
+#endif
+#else
+    const auto idx = hn::Load(hn::Rebind<int64_t, D>(), offset[k]);
+    sx[k] = hn::GatherIndex(d, base + 0, idx);
+    sy[k] = hn::GatherIndex(d, base + 1, idx);
+    num[k] = hn::GatherIndex(d, base + 2, idx);
+    den[k] = hn::GatherIndex(d, base + 3, idx);
+#endif
+  }
+}
+
+// Snaps the vertices (snapCoordinate: an integer below 2^23, the same in double as in int64)
+// into X, Y and classifies each lane by twice its signed area on the snapped grid (exact):
+// degenerate (0), front facing (negative: counter-clockwise with y down), culled by `cull`
+// (never a degenerate one). Returns the twice signed area.
+HWY_INLINE V Facing(const V* sx, const V* sy, Cull cull, V* X, V* Y, M& degenerate, M& front, M& culled) {
+  const D d;
+  const V subpixel = hn::Set(d, double(kSubpixelOne)), halfUnit = hn::Set(d, 0.5);
+  for (int k = 0; k < 3; ++k) {
+    X[k] = hn::Floor(hn::Add(hn::Mul(sx[k], subpixel), halfUnit));
+    Y[k] = hn::Floor(hn::Add(hn::Mul(sy[k], subpixel), halfUnit));
+  }
+  const V zero = hn::Zero(d);
+  const V area = hn::Sub(hn::Mul(hn::Sub(X[1], X[0]), hn::Sub(Y[2], Y[0])), hn::Mul(hn::Sub(Y[1], Y[0]), hn::Sub(X[2], X[0])));
+  degenerate = hn::Eq(area, zero);
+  front = hn::Lt(area, zero);
+  culled = hn::FirstN(d, 0);
+  if (cull == Cull::Back) culled = hn::AndNot(front, hn::Not(degenerate));
+  if (cull == Cull::Front) culled = front;
+  culled = hn::AndNot(degenerate, culled);
+  return area;
+}
+
+size_t SetupLanes(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
                   const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
                   SetupTriangle* out, const DepthSetup* depth, double* nearest, DeferredFace* deferred,
                   size_t* deferredCount) {
@@ -150,78 +240,21 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
     const size_t lanes = std::min(N, count - first);
     // Each vertex's fields (ProjectedVertex: sx, sy, num, den; 4 x 8 bytes), and snap
     // (snapCoordinate: an integer below 2^23, the same in double as in int64).
-#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
-    // Each lane's vertex indices: the batch's own lists, or (a last, partial batch) its last
-    // triangle's repeated.
-    uint32_t padded[3][kSetupBatch];
-    const uint32_t* index[3];
-    for (int k = 0; k < 3; ++k) {
-      index[k] = vertex[k] + first;
-      if (lanes < N) {
-        for (size_t j = 0; j < N; ++j) padded[k][j] = vertex[k][first + std::min(j, lanes - 1)];
-        index[k] = padded[k];
-      }
-    }
-#else
-    HWY_ALIGN int64_t offset[3][kSetupBatch];
-    for (int k = 0; k < 3; ++k)
-      for (size_t j = 0; j < N; ++j)
-        offset[k][j] = int64_t(vertex[k][first + std::min(j, lanes - 1)]) * int64_t(sizeof(ProjectedVertex) / 8);
-#endif
-    const double* base = reinterpret_cast<const double*>(projected);
-    const V subpixel = hn::Set(d, double(kSubpixelOne)), halfUnit = hn::Set(d, 0.5);
     V sx[3], sy[3], X[3], Y[3], num[3], den[3];
-    for (int k = 0; k < 3; ++k) {
-#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
-      // Each vertex loaded whole (4 doubles, one 32-byte load) and each group of 4 transposed,
-      // rather than 4 gathers: AVX-512 (8 lanes, two groups) sphere frames 0.95-0.97 of the time
-      // on Zen 5; AVX2 (4 lanes, one group) sphere --depth-only frames 0.94 of the time on an
-      // AMD EPYC without AVX-512.
-      static_assert(kSetupBatch == 8);
-      using H4 = hn::CappedTag<double, 4>;  // one vertex's 4 fields
-      const H4 h;
-      using H = hn::Vec<H4>;
-      constexpr int kGroups = int(hn::MaxLanes(D())) / 4;
-      static_assert(kGroups == 1 || kGroups == 2);
-      H field[4][kGroups];  // sx, sy, num, den; lanes 0-3 (and 4-7)
-      for (int g = 0; g < kGroups; ++g) {
-        H q[4];
-        for (int j = 0; j < 4; ++j)
-          q[j] = hn::LoadU(h, base + size_t(index[k][4 * g + j]) * (sizeof(ProjectedVertex) / 8));
-        const H l01 = hn::InterleaveLower(h, q[0], q[1]), u01 = hn::InterleaveUpper(h, q[0], q[1]);  // sx sx n n / sy sy d d
-        const H l23 = hn::InterleaveLower(h, q[2], q[3]), u23 = hn::InterleaveUpper(h, q[2], q[3]);
-        field[0][g] = hn::ConcatLowerLower(h, l23, l01);
-        field[1][g] = hn::ConcatLowerLower(h, u23, u01);
-        field[2][g] = hn::ConcatUpperUpper(h, l23, l01);
-        field[3][g] = hn::ConcatUpperUpper(h, u23, u01);
+    LoadVertices(projected, vertex, first, lanes, sx, sy, num, den);
+    M degenerate, front, culled;
+    const V area = Facing(sx, sy, cull, X, Y, degenerate, front, culled);
+    // A vector of culled (or degenerate) triangles only: counted, and nothing more to do (city
+    // --occlusion --cull back 1.02x on AVX2).
+    if (cull != Cull::None) {
+      const M valid = hn::FirstN(d, lanes);
+      if (hn::AllFalse(d, hn::AndNot(hn::Or(degenerate, culled), valid))) {
+        counters.degenerate += hn::CountTrue(d, hn::And(valid, degenerate));
+        counters.culledBackface += hn::CountTrue(d, hn::And(valid, culled));
+        continue;
       }
-#if HWY_TARGET <= HWY_AVX3
-      sx[k] = hn::Combine(d, field[0][1], field[0][0]);
-      sy[k] = hn::Combine(d, field[1][1], field[1][0]);
-      num[k] = hn::Combine(d, field[2][1], field[2][0]);
-      den[k] = hn::Combine(d, field[3][1], field[3][0]);
-#else
-      sx[k] = field[0][0], sy[k] = field[1][0], num[k] = field[2][0], den[k] = field[3][0];
-#endif
-#else
-      const auto idx = hn::Load(hn::Rebind<int64_t, D>(), offset[k]);
-      sx[k] = hn::GatherIndex(d, base + 0, idx);
-      sy[k] = hn::GatherIndex(d, base + 1, idx);
-      num[k] = hn::GatherIndex(d, base + 2, idx);
-      den[k] = hn::GatherIndex(d, base + 3, idx);
-#endif
-      X[k] = hn::Floor(hn::Add(hn::Mul(sx[k], subpixel), halfUnit));
-      Y[k] = hn::Floor(hn::Add(hn::Mul(sy[k], subpixel), halfUnit));
     }
     const V zero = hn::Zero(d);
-    // Twice the signed area on the snapped grid (exact).
-    const V area = hn::Sub(hn::Mul(hn::Sub(X[1], X[0]), hn::Sub(Y[2], Y[0])), hn::Mul(hn::Sub(Y[1], Y[0]), hn::Sub(X[2], X[0])));
-    const M degenerate = hn::Eq(area, zero);
-    const M front = hn::Lt(area, zero);
-    M culled = hn::FirstN(d, 0);
-    if (cull == Cull::Back) culled = hn::AndNot(front, hn::Not(degenerate));
-    if (cull == Cull::Front) culled = front;
-    culled = hn::AndNot(degenerate, culled);
     // Vertex order making the edge functions positive inside: swap 1 and 2 when area < 0.
     auto order = [&](V* a) {
       const V a1 = hn::IfThenElse(front, a[2], a[1]), a2 = hn::IfThenElse(front, a[1], a[2]);
@@ -464,6 +497,54 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
   return written;
 }
 
+// Set-up of `count` triangles (see setupBatch in frontend.hpp). With cullFirst (and a cull),
+// the facing test goes first, a vector of triangles at a time, and the triangles it keeps are
+// compacted and set up together: a culled triangle then costs its vertex loads and area only,
+// a kept one those twice.
+size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
+                  const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
+                  SetupTriangle* out, const DepthSetup* depth, double* nearest, DeferredFace* deferred,
+                  size_t* deferredCount, bool cullFirst) {
+  if (cull == Cull::None || !cullFirst)
+    return SetupLanes(projected, vertex, triIndex, face, count, cam, cull, counters, out, depth, nearest, deferred,
+                      deferredCount);
+  const D d;
+  const size_t N = hn::Lanes(d);
+  constexpr size_t kPart = 64;
+  uint32_t keptVertex[3][kPart], keptTriangle[kPart], keptFace[kPart];
+  const uint32_t* keptLists[3] = {keptVertex[0], keptVertex[1], keptVertex[2]};
+  size_t written = 0, deferredWritten = 0;
+  for (size_t from = 0; from < count; from += kPart) {
+    const size_t end = std::min(count, from + kPart);
+    size_t kept = 0;
+    for (size_t first = from; first < end; first += N) {
+      const size_t lanes = std::min(N, end - first);
+      V sx[3], sy[3], X[3], Y[3], num[3], den[3];
+      LoadVertices(projected, vertex, first, lanes, sx, sy, num, den);
+      M degenerate, front, culled;
+      Facing(sx, sy, cull, X, Y, degenerate, front, culled);
+      const M valid = hn::FirstN(d, lanes);
+      counters.degenerate += hn::CountTrue(d, hn::And(valid, degenerate));
+      counters.culledBackface += hn::CountTrue(d, hn::And(valid, culled));
+      uint8_t keepBits[8] = {};
+      hn::StoreMaskBits(d, hn::AndNot(hn::Or(degenerate, culled), valid), keepBits);
+      for (unsigned bits = keepBits[0]; bits; bits &= bits - 1) {
+        const size_t j = first + hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
+        for (int k = 0; k < 3; ++k) keptVertex[k][kept] = vertex[k][j];
+        keptTriangle[kept] = triIndex[j];
+        keptFace[kept++] = face[j];
+      }
+    }
+    size_t deferredHere = 0;  // (none: faces are deferred only without a cull; kept general)
+    written += SetupLanes(projected, keptLists, keptTriangle, keptFace, kept, cam, cull, counters, out + written,
+                          depth, nearest ? nearest + written : nullptr, deferred ? deferred + deferredWritten : nullptr,
+                          &deferredHere);
+    deferredWritten += deferredHere;
+  }
+  if (deferredCount) *deferredCount = deferredWritten;
+  return written;
+}
+
 // transformVertices() (frontend.hpp): transformVertex, clipOutcode and projectVertex
 // (frontend.cpp) lane by lane, with the same IEEE operations in the same order.
 void TransformVertices(const dvec3* positions, size_t count, const dmat4& matrix, const Camera& cam,
@@ -547,9 +628,9 @@ void transformVertices(const dvec3* positions, size_t count, const dmat4& M, con
 size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
                   const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
                   SetupTriangle* out, const DepthSetup* depth, double* nearest, DeferredFace* deferred,
-                  size_t* deferredCount) {
+                  size_t* deferredCount, bool cullFirst) {
   return HWY_DYNAMIC_DISPATCH(SetupBatch)(projected, vertex, triIndex, face, count, cam, cull, counters, out, depth,
-                                          nearest, deferred, deferredCount);
+                                          nearest, deferred, deferredCount, cullFirst);
 }
 }  // namespace hsr
 #endif
