@@ -206,10 +206,12 @@ HWY_INLINE void LoadVertices(const ProjectedVertex* projected, const uint32_t* c
 }
 
 // Snaps the vertices (snapCoordinate: an integer below 2^23, the same in double as in int64)
-// into X, Y and classifies each lane by twice its signed area on the snapped grid (exact):
-// degenerate (0), front facing (negative: counter-clockwise with y down), culled by `cull`
-// (never a degenerate one). Returns the twice signed area.
-HWY_INLINE V Facing(const V* sx, const V* sy, Cull cull, V* X, V* Y, M& degenerate, M& front, M& culled) {
+// into X, Y and classifies each of the first `lanes` lanes by twice its signed area on the
+// snapped grid (exact): degenerate (0) or culled by `cull` (never a degenerate one), both
+// counted, else live; front facing when negative (counter-clockwise with y down). Returns the
+// twice signed area.
+HWY_INLINE V Facing(const V* sx, const V* sy, Cull cull, size_t lanes, FrontEndCounters& counters, V* X, V* Y,
+                    M& front, M& live) {
   const D d;
   const V subpixel = hn::Set(d, double(kSubpixelOne)), halfUnit = hn::Set(d, 0.5);
   for (int k = 0; k < 3; ++k) {
@@ -218,12 +220,16 @@ HWY_INLINE V Facing(const V* sx, const V* sy, Cull cull, V* X, V* Y, M& degenera
   }
   const V zero = hn::Zero(d);
   const V area = hn::Sub(hn::Mul(hn::Sub(X[1], X[0]), hn::Sub(Y[2], Y[0])), hn::Mul(hn::Sub(Y[1], Y[0]), hn::Sub(X[2], X[0])));
-  degenerate = hn::Eq(area, zero);
+  const M degenerate = hn::Eq(area, zero);
   front = hn::Lt(area, zero);
-  culled = hn::FirstN(d, 0);
+  M culled = hn::FirstN(d, 0);
   if (cull == Cull::Back) culled = hn::AndNot(front, hn::Not(degenerate));
   if (cull == Cull::Front) culled = front;
   culled = hn::AndNot(degenerate, culled);
+  const M valid = hn::FirstN(d, lanes);
+  counters.degenerate += hn::CountTrue(d, hn::And(valid, degenerate));
+  counters.culledBackface += hn::CountTrue(d, hn::And(valid, culled));
+  live = hn::AndNot(hn::Or(degenerate, culled), valid);
   return area;
 }
 
@@ -242,18 +248,11 @@ size_t SetupLanes(const ProjectedVertex* projected, const uint32_t* const* verte
     // (snapCoordinate: an integer below 2^23, the same in double as in int64).
     V sx[3], sy[3], X[3], Y[3], num[3], den[3];
     LoadVertices(projected, vertex, first, lanes, sx, sy, num, den);
-    M degenerate, front, culled;
-    const V area = Facing(sx, sy, cull, X, Y, degenerate, front, culled);
+    M front, live;
+    const V area = Facing(sx, sy, cull, lanes, counters, X, Y, front, live);
     // A vector of culled (or degenerate) triangles only: counted, and nothing more to do (city
     // --occlusion --cull back 1.02x on AVX2).
-    if (cull != Cull::None) {
-      const M valid = hn::FirstN(d, lanes);
-      if (hn::AllFalse(d, hn::AndNot(hn::Or(degenerate, culled), valid))) {
-        counters.degenerate += hn::CountTrue(d, hn::And(valid, degenerate));
-        counters.culledBackface += hn::CountTrue(d, hn::And(valid, culled));
-        continue;
-      }
-    }
+    if (hn::AllFalse(d, live)) continue;
     const V zero = hn::Zero(d);
     // Vertex order making the edge functions positive inside: swap 1 and 2 when area < 0.
     auto order = [&](V* a) {
@@ -348,12 +347,9 @@ size_t SetupLanes(const ProjectedVertex* projected, const uint32_t* const* verte
     through(num, na, nb, nc);
     through(den, da, db, dc);
 
-    // Reasons counted as the scalar function does (the first that applies), without a branch
-    // per lane; then one SetupTriangle per surviving lane, in order.
-    const M valid = hn::FirstN(d, lanes);
-    const M live = hn::AndNot(hn::Or(degenerate, culled), valid);  // (culled excludes degenerate)
-    counters.degenerate += hn::CountTrue(d, hn::And(valid, degenerate));
-    counters.culledBackface += hn::CountTrue(d, hn::And(valid, culled));
+    // Reasons counted as the scalar function does (the first that applies; degenerate and
+    // culled by Facing), without a branch per lane; then one SetupTriangle per surviving lane,
+    // in order.
     counters.culledFrustum += hn::CountTrue(d, hn::And(live, hn::And(noBox, offScreen)));
     counters.empty += hn::CountTrue(d, hn::And(live, empty));  // (empty excludes noBox)
     const M survivors = hn::AndNot(hn::Or(noBox, empty), live);
@@ -521,13 +517,10 @@ size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* verte
       const size_t lanes = std::min(N, end - first);
       V sx[3], sy[3], X[3], Y[3], num[3], den[3];
       LoadVertices(projected, vertex, first, lanes, sx, sy, num, den);
-      M degenerate, front, culled;
-      Facing(sx, sy, cull, X, Y, degenerate, front, culled);
-      const M valid = hn::FirstN(d, lanes);
-      counters.degenerate += hn::CountTrue(d, hn::And(valid, degenerate));
-      counters.culledBackface += hn::CountTrue(d, hn::And(valid, culled));
+      M front, live;
+      Facing(sx, sy, cull, lanes, counters, X, Y, front, live);
       uint8_t keepBits[8] = {};
-      hn::StoreMaskBits(d, hn::AndNot(hn::Or(degenerate, culled), valid), keepBits);
+      hn::StoreMaskBits(d, live, keepBits);
       for (unsigned bits = keepBits[0]; bits; bits &= bits - 1) {
         const size_t j = first + hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
         for (int k = 0; k < 3; ++k) keptVertex[k][kept] = vertex[k][j];

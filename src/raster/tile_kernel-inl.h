@@ -80,13 +80,6 @@ HWY_INLINE Mask Nearer(V a, V b) {
   else return hn::Lt(a, b);
 }
 
-// "a is nearer than b or equal to it" for the format's compare direction.
-template <bool kGreater>
-HWY_INLINE Mask NotFarther(V a, V b) {
-  if constexpr (kGreater) return hn::Ge(a, b);
-  else return hn::Le(a, b);
-}
-
 // A triangle whose fragments are at best `nearest` cannot change a cell that holds `stored`:
 // nearest is farther (with ids: a fragment equal to the stored value wins when its triangle was
 // submitted first, so only a farther one is beaten), or, depth only, not nearer (equal values
