@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <type_traits>
 
 #include "core/depth_map.hpp"
 #include "frontend/frontend.hpp"
@@ -298,23 +299,35 @@ size_t SetupLanes(const ProjectedVertex* projected, const uint32_t* const* verte
         stepA[i] = hn::Mul(hn::Neg(edy[i]), one);
         stepB[i] = hn::Mul(edx[i], one);
       }
-      // Only as many rows and columns as the batch's largest small box has (lanes with smaller
-      // boxes, or none, are masked by rowIn and the column test).
+      // Only as many rows and columns as the batch's largest small box has. A lane's centres
+      // beyond its own box are outside its triangle (right of or below every vertex: some edge
+      // function is negative there), unless the image's edge cut the box short: only then are
+      // they masked, by rowIn and the column test (sphere --depth-only 1.013x on AVX2).
       const int rows = int(hn::GetLane(hn::MaxOfLanes(d, hn::IfThenElseZero(small, bh))));
       const int cols = int(hn::GetLane(hn::MaxOfLanes(d, hn::IfThenElseZero(small, bw))));
-      for (int oy = 0; oy < rows; ++oy) {
-        V e[3] = {row[0], row[1], row[2]};
-        const M rowIn = hn::Lt(hn::Set(d, double(oy)), bh);
-        for (int ox = 0; ox < cols; ++ox) {
-          M inside = hn::And(rowIn, hn::Lt(hn::Set(d, double(ox)), bw));
-          for (int i = 0; i < 3; ++i) {
-            inside = hn::And(inside, hn::Ge(e[i], ebias[i]));
-            e[i] = hn::Add(e[i], stepA[i]);
+      const V rightmost = hn::Floor(hn::Mul(hn::Sub(maxX, half), inv256));
+      const V lowest = hn::Floor(hn::Mul(hn::Sub(maxY, half), inv256));
+      const bool cut = !hn::AllFalse(d, hn::And(small, hn::Or(hn::Lt(bx1, rightmost), hn::Lt(by1, lowest))));
+      auto cover = [&](auto masked) HWY_ATTR {
+        for (int oy = 0; oy < rows; ++oy) {
+          V e[3] = {row[0], row[1], row[2]};
+          const M rowIn = hn::Lt(hn::Set(d, double(oy)), bh);
+          for (int ox = 0; ox < cols; ++ox) {
+            M inside = hn::Ge(e[0], ebias[0]);
+            if constexpr (decltype(masked)::value)
+              inside = hn::And(inside, hn::And(rowIn, hn::Lt(hn::Set(d, double(ox)), bw)));
+            e[0] = hn::Add(e[0], stepA[0]);
+            for (int i = 1; i < 3; ++i) {
+              inside = hn::And(inside, hn::Ge(e[i], ebias[i]));
+              e[i] = hn::Add(e[i], stepA[i]);
+            }
+            coverage = hn::Add(coverage, hn::IfThenElseZero(inside, hn::Set(d, double(1 << (oy * kCoverageBox + ox)))));
           }
-          coverage = hn::Add(coverage, hn::IfThenElseZero(inside, hn::Set(d, double(1 << (oy * kCoverageBox + ox)))));
+          for (int i = 0; i < 3; ++i) row[i] = hn::Add(row[i], stepB[i]);
         }
-        for (int i = 0; i < 3; ++i) row[i] = hn::Add(row[i], stepB[i]);
-      }
+      };
+      if (cut) cover(std::true_type());
+      else cover(std::false_type());
       coverage = hn::IfThenElseZero(small, coverage);
     }
     const M covers = hn::Gt(coverage, zero);
