@@ -274,12 +274,14 @@ bool clusterInView(const TriangleCluster& cl, const ClusterView& view, const Cam
     auto row = [&](int r) { return ((term[0][r][c & 1] + term[1][r][c >> 1 & 1]) + term[2][r][c >> 2 & 1]) + M[3][r]; };
     corner[c] = {row(0), row(1), row(2), row(3)};
     for (int plane = 0; plane < kPlanes; ++plane) inside &= planeDistance(corner[c], plane, cam) > margin;
+    if (!inside) return false;
   }
-  if (!inside) return false;
   for (const HVertex& h : corner) {
     out.zMin = std::min(out.zMin, h.w - 1e-12 * wTerms);
     out.zMax = std::max(out.zMax, h.w + 1e-12 * wTerms);
-    const double sx = h.hx / h.w, sy = h.hy / h.w;
+    // (One division a corner, not two: the reciprocal's rounding, ~1e-16 relative, is far
+    // within the room deferCluster leaves, ~1e-12.)
+    const double inverse = 1 / h.w, sx = h.hx * inverse, sy = h.hy * inverse;
     out.x0 = std::min(out.x0, sx), out.x1 = std::max(out.x1, sx);
     out.y0 = std::min(out.y0, sy), out.y1 = std::max(out.y1, sy);
   }
