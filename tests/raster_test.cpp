@@ -325,7 +325,7 @@ TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
     if (kind == 1) p[1] = p[0] + dvec2(0.3, 0.2), p[2] = p[0] + dvec2(-0.2, 0.4);  // tiny
     if (kind == 2) p[2] = p[1];                                                 // degenerate
     if (kind == 3) p[2] = p[0] + (p[1] - p[0]) * 0.5 + dvec2(0, 0.01);          // sliver
-    if (kind == 4) {  // small: covered centres listed; every other one cut by the right or bottom edge
+    if (kind == 4) {  // small: covered centres listed; every other one across the right or bottom edge
       if (i % 12 == 10) p[0] = i % 24 < 12 ? dvec2(100 - 0.2 * (i % 11), p[0].y) : dvec2(p[0].x, 80 - 0.2 * (i % 13));
       p[1] = p[0] + dvec2(2.7, 0.9), p[2] = p[0] + dvec2(0.8, 3.1);
     }
