@@ -211,6 +211,11 @@ struct TileFrame : TileRect {
   double nearestPossible; // stored in cells outside the image: never drawn, never the farthest
   double farthestPossible;
   double storedOne;       // the stored value of mapped depth 1 (that of 0 is 0)
+  // Whether block b lies wholly in the image (its cells all drawable).
+  bool blockInImage(int b) const {
+    constexpr int kBlocksX = kTileSize / kBlockSize;
+    return (b % kBlocksX + 1) * kBlockSize <= w && (b / kBlocksX + 1) * kBlockSize <= h;
+  }
 };
 
 template <DepthStorage S, DepthMapping M>
@@ -242,7 +247,7 @@ HWY_INLINE void FillBlock(TileScratch& s, const TileFrame& f, int b, bool plane,
   const V farthestV = hn::Set(d, f.farthestPossible);
   const auto keyV = hn::Set(du, key), zeroKey = hn::Zero(du);
   const int bx = (b % kBlocksX) * kBlockSize, by = (b / kBlocksX) * kBlockSize;
-  if (!plane && bx + kBlockSize <= f.w && by + kBlockSize <= f.h) {  // one value, all in the image
+  if (!plane && f.blockInImage(b)) {  // one value, all in the image
     for (int y = by; y < by + kBlockSize; ++y)
       for (size_t k = 0; k < size_t(kBlockSize); k += N) {
         const size_t at = size_t(y) * kTileSize + size_t(bx) + k;
@@ -294,11 +299,11 @@ void Materialize(const TileJob& job, const TileFrame& f) {
   for (int b = 0; b < kBlocksPerTile; ++b) {
     const int bx = (b % (kTileSize / kBlockSize)) * kBlockSize, by = (b / (kTileSize / kBlockSize)) * kBlockSize;
     s.blockClear[b] = false;
-    if (!plane && bx + kBlockSize <= f.w && by + kBlockSize <= f.h) {
+    if (!plane && f.blockInImage(b)) {
       s.blockKey[b] = 0;
       s.blockClear[b] = true;
       s.blockFar[b] = s.blockNear[b] = f.clear;
-    } else if (plane && bx + kBlockSize <= f.w && by + kBlockSize <= f.h) {
+    } else if (plane && f.blockInImage(b)) {
       // A block wholly in the image keeps the plane as its uniform state (written only when a
       // triangle lands on it: MaterializeBlock), with the plane's bounds over its corners.
       const StoredRange r = storedRangeOverRect<S, M>(m, pErr, qErr, f.x0 + bx + 0.5, f.x0 + bx + kBlockSize - 0.5,
@@ -365,8 +370,7 @@ void MaterializeBlock(const TileJob& job, const TileFrame& f, int b, ReciprocalC
   } else {
     const MappedPlanes m = mapPlanes<M>(s.blockTriangle[b]->depthNum, s.blockTriangle[b]->depthDen, job.depth.near,
                                         job.depth.far, job.depth.orthographic, reciprocal);
-    const int bx = (b % (kTileSize / kBlockSize)) * kBlockSize, by = (b / (kTileSize / kBlockSize)) * kBlockSize;
-    if (bx + kBlockSize <= f.w && by + kBlockSize <= f.h) FillPlaneBlock<S, kIds>(s, f, b, m, s.blockKey[b]);
+    if (f.blockInImage(b)) FillPlaneBlock<S, kIds>(s, f, b, m, s.blockKey[b]);
     else FillBlock<S, M, kIds>(s, f, b, true, m, 0.0, s.blockKey[b], far, near);
   }
   s.blockKey[b] = 0;
