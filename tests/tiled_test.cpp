@@ -624,6 +624,47 @@ TEST(Tiled, ResolvingIdsNeedsPrepareResolve) {
   EXPECT_GT(pixelTiles, 0);
 }
 
+// orderTile's buckets are of equal width in eye depth, whatever the mapping: with a perspective
+// camera the z, reversed and inv mappings crowd the distance into a few stored values (here 50
+// and 100 units away fall into one bucket of equal stored width), and the tile's nearer
+// triangles must still come first.
+TEST(Tiled, OrderTileVisitsByEyeDepthInEveryMapping) {
+  Scene scene;
+  scene.source = "test";
+  // Three squares' first triangles facing the camera, farthest submitted first: 100, 50, 1 away.
+  for (double d : {100.0, 50.0, 1.0}) {
+    const uint32_t first = uint32_t(scene.positions.size());
+    const double r = 0.4 * d;
+    scene.positions.push_back({-r, -r, -d});
+    scene.positions.push_back({r, -r, -d});
+    scene.positions.push_back({0, r, -d});
+    const std::vector<uint32_t> face = {first, first + 1, first + 2};
+    scene.addFace(std::span<const uint32_t>(face), Rgba8{200, 0, 0, 255});
+  }
+  scene.finalize();
+  CameraSpec spec;
+  spec.eye = {0, 0, 0};
+  spec.target = {0, 0, -1};
+  spec.near = 0.1;
+  spec.far = 1000;
+  const Camera cam = resolveCamera(spec, 60, 60, scene.bounds());  // one tile
+  for (const char* f : {"f32:z", "u24:z", "f32:reversed", "u32:inv", "f32:linear", "u16:reversed"}) {
+    const DepthSetup depth{DepthFormat::parse(f), cam.near, cam.far, cam.orthographic};
+    FrontEndOutput fe;
+    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
+    ASSERT_EQ(fe.triangleCount(), 3u) << f;
+    tiled::Bins bins;
+    tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
+    tiled::binChunk(bins, 0, fe.chunks[0]);
+    ASSERT_EQ(bins.tileCount(), 1);
+    tiled::TileOrder lists;
+    const std::vector<tiled::TileEntry>& order = tiled::orderTile(bins, 0, depth, lists);
+    ASSERT_EQ(order.size(), 3u) << f;
+    for (uint32_t i = 0; i < 3; ++i)  // nearest (submitted last) first
+      EXPECT_EQ(order[i].key, tiled::triangleKey(0, tiled::localKey(2 - i, false, 2 - i))) << f << " place " << i;
+  }
+}
+
 TEST(Tiled, EqualDepthGoesToTheTriangleSubmittedFirstWhateverTheVisitOrder) {
   Scene scene;
   scene.source = "test";
@@ -652,7 +693,7 @@ TEST(Tiled, EqualDepthGoesToTheTriangleSubmittedFirstWhateverTheVisitOrder) {
     tiled::RasterCounters counters;
     ASSERT_EQ(bins.tileCount(), 1);
     tiled::TileOrder lists;
-    const std::vector<tiled::TileEntry>& order = tiled::orderTile(bins, 0, greater, lists);
+    const std::vector<tiled::TileEntry>& order = tiled::orderTile(bins, 0, depth, lists);
     ASSERT_EQ(order.size(), 2u);
     EXPECT_EQ(order[0].key, tiled::triangleKey(0, tiled::localKey(1, false, 1))) << f;  // the second triangle first
     tiled::rasterizeTile(bins, 0, depth, true, *scratch, lists, counters);

@@ -446,7 +446,7 @@ void RasterizeTileT(const TileJob& job) {
 
   // The tile's triangles, roughly nearest first (orderTile): any order gives the same image.
   const std::vector<TileEntry>& order =
-      job.pass == TileJob::Pass::Late ? job.order->late : orderTile(bins, job.tile, kGreater, *job.order);
+      job.pass == TileJob::Pass::Late ? job.order->late : orderTile(bins, job.tile, job.depth, *job.order);
   for (size_t item = 0, end = order.size(); item < end; ++item) {
     const SetupTriangle& t = bins.triangle(order[item].key);
     // The records are scattered over the chunks: fetch ahead those of triangles the tile's

@@ -345,7 +345,35 @@ uint64_t TileOrder::memoryBytes() const {
   return (entries.capacity() + ordered.capacity() + late.capacity()) * sizeof(TileEntry) + bucket.capacity();
 }
 
-const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater, TileOrder& order) {
+namespace {
+
+// Eye depth as 1 / (alpha + beta stored) — a perspective camera's z, reversed and inv mappings
+// map 1 / eye depth affinely — or, when `eye` is false (orthographic or linear: the stored value
+// is already affine in eye depth), the stored value itself, with `nearer` its direction.
+struct OrderKey {
+  bool eye = false;
+  double alpha = 0, beta = 0;
+};
+
+OrderKey orderKeyOf(const DepthSetup& depth) {
+  OrderKey k;
+  const DepthMapping mapping = depth.format.mapping;
+  if (depth.orthographic || mapping == DepthMapping::Linear) return k;
+  const double n = depth.near, f = depth.far;
+  const double scale = depth.format.storage == DepthStorage::F32   ? 1.0
+                       : depth.format.storage == DepthStorage::U16 ? kDepthScale<DepthStorage::U16>
+                       : depth.format.storage == DepthStorage::U24 ? kDepthScale<DepthStorage::U24>
+                                                                   : kDepthScale<DepthStorage::U32>;
+  k.eye = true;
+  if (mapping == DepthMapping::Z) k.alpha = 1 / n, k.beta = -(f - n) / (f * n) / scale;  // unmapDepth<Z>
+  else if (mapping == DepthMapping::Reversed) k.alpha = 1 / f, k.beta = (f - n) / (n * f) / scale;
+  else k.alpha = 0, k.beta = 1 / (n * scale);  // inv
+  return k;
+}
+
+}  // namespace
+
+const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, const DepthSetup& depth, TileOrder& order) {
   std::vector<TileEntry>& in = order.entries;
   std::vector<TileEntry>& out = order.ordered;
   in.resize(bins.entries(tile));  // (grows to the fullest tile met: no allocation once warm)
@@ -364,20 +392,36 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater
     }
   });
   if (in.size() < 2 || !finite || !(hi > lo) || !std::isfinite(hi - lo)) return in;  // (unsorted: any order is right)
-  // Counting sort into buckets of equal width between the extreme bounds, nearest bucket first.
+  // Counting sort into buckets of equal width in eye depth between the extreme bounds, nearest
+  // bucket first. (Equal widths in the stored value put most of a perspective scene in a bucket
+  // or two: the z, reversed and inv mappings crowd the distance together. By eye depth, city
+  // --occlusion --cull back x.xx on AVX2, as fast as with the linear mapping.)
   constexpr int kBuckets = 32;
-  const double scale = (kBuckets - 0.5) / (hi - lo), origin = greater ? hi : lo;
-  const double sign = greater ? -scale : scale;  // rank = (v - origin) * sign, in [0, kBuckets)
+  const OrderKey key = orderKeyOf(depth);
+  double keyLo = lo, keyHi = hi;  // (the key is monotonic in the stored value)
+  if (key.eye) {
+    keyLo = 1 / (key.alpha + key.beta * lo), keyHi = 1 / (key.alpha + key.beta * hi);
+    if (keyLo > keyHi) std::swap(keyLo, keyHi);
+    if (!(keyLo >= 0) || !std::isfinite(keyHi - keyLo) || !(keyHi > keyLo)) return in;
+  }
+  // rank = (k - origin) * sign in [0, kBuckets): nearest first (the smallest eye depth, or the
+  // nearest stored value).
+  const bool nearerIsLarger = !key.eye && depth.format.greaterWins();
+  const double scale = (kBuckets - 0.5) / (keyHi - keyLo), origin = nearerIsLarger ? keyHi : keyLo;
+  const double sign = nearerIsLarger ? -scale : scale;
   uint32_t start[kBuckets + 1] = {};
   order.bucket.resize(in.size());
   uint8_t* bucket = order.bucket.data();
-  for (size_t i = 0; i < in.size(); ++i) {
-    bucket[i] = uint8_t((in[i].nearest - origin) * sign);
-    ++start[bucket[i] + 1];
+  const size_t count = in.size();
+  if (key.eye) {
+    for (size_t i = 0; i < count; ++i) bucket[i] = uint8_t((1 / (key.alpha + key.beta * in[i].nearest) - origin) * sign);
+  } else {
+    for (size_t i = 0; i < count; ++i) bucket[i] = uint8_t((in[i].nearest - origin) * sign);
   }
+  for (size_t i = 0; i < count; ++i) ++start[bucket[i] + 1];
   for (int b = 0; b < kBuckets; ++b) start[b + 1] += start[b];
-  out.resize(in.size());
-  for (size_t i = 0; i < in.size(); ++i) out[start[bucket[i]]++] = in[i];
+  out.resize(count);
+  for (size_t i = 0; i < count; ++i) out[start[bucket[i]]++] = in[i];
   return out;
 }
 

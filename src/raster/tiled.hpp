@@ -296,15 +296,15 @@ struct TileOrder {
 };
 
 /// The triangles binned to `tile`, roughly nearest first (a stable bucket sort of their nearest
-/// bounds: `greater` = larger stored values are nearer; in submission order when a bound is not
-/// finite), in `order.ordered` or `order.entries`, which it returns.
+/// bounds by the eye depth they stand for, in `depth`'s format; in submission order when a bound
+/// is not finite), in `order.ordered` or `order.entries`, which it returns.
 /// The kernel's depth test makes the order free: a fragment wins when it is strictly nearer
 /// than the stored value, or equal to it and its triangle was submitted first (triangleKey) —
 /// per pixel, the nearest fragment and, among equals, the first submitted: the image the z-buffer
 /// draws in submission order, bit for bit. Nearest first, the tiles' and blocks' farthest depths
 /// reject most hidden triangles before their pixels are visited (the front-to-back + z-buffer
 /// combination of documents 000/001, per tile).
-const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, bool greater, TileOrder& order);
+const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, const DepthSetup& depth, TileOrder& order);
 
 /// Binning, in two steps: prepareBins() sizes the bins for a width x height image and
 /// `chunkCount` front-end chunks; binChunk(c) sorts chunk c's triangles into its own lists (the
