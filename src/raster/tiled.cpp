@@ -395,14 +395,17 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, const DepthS
   // Counting sort into buckets of equal width in eye depth between the extreme bounds, nearest
   // bucket first. (Equal widths in the stored value put most of a perspective scene in a bucket
   // or two: the z, reversed and inv mappings crowd the distance together. By eye depth, city
-  // --occlusion --cull back x.xx on AVX2, as fast as with the linear mapping.)
+  // --occlusion --cull back 1.63x, its full frame 1.30x on AVX2.) When the tile's farthest
+  // bound is less than 1.25 times as far as its nearest, the stored value is nearly affine in
+  // eye depth over that range, and the buckets stay in it: no division per triangle (the
+  // sphere's tiles, 1000 triangles each at about one distance).
   constexpr int kBuckets = 32;
-  const OrderKey key = orderKeyOf(depth);
+  OrderKey key = orderKeyOf(depth);
   double keyLo = lo, keyHi = hi;  // (the key is monotonic in the stored value)
   if (key.eye) {
-    keyLo = 1 / (key.alpha + key.beta * lo), keyHi = 1 / (key.alpha + key.beta * hi);
-    if (keyLo > keyHi) std::swap(keyLo, keyHi);
-    if (!(keyLo >= 0) || !std::isfinite(keyHi - keyLo) || !(keyHi > keyLo)) return in;
+    const double eyeLo = 1 / (key.alpha + key.beta * lo), eyeHi = 1 / (key.alpha + key.beta * hi);
+    keyLo = std::min(eyeLo, eyeHi), keyHi = std::max(eyeLo, eyeHi);
+    if (!(keyLo > 0) || !std::isfinite(keyHi) || !(keyHi > 1.25 * keyLo)) key.eye = false, keyLo = lo, keyHi = hi;
   }
   // rank = (k - origin) * sign in [0, kBuckets): nearest first (the smallest eye depth, or the
   // nearest stored value).
