@@ -228,17 +228,22 @@ void sortPairs(ChunkBins& cb, size_t tiles, ItemOf&& itemOf, NearestOf&& nearest
   for (size_t t = 0; t < tiles; ++t) cb.start[t + 1] += cb.start[t];
   cb.items.resize(n);
   cb.itemNearest.resize(n);
+  uint32_t* const items = cb.items.data();
+  double* const itemNearest = cb.itemNearest.data();
   for (size_t i = 0, j; i < n; i = j) {
     j = runEnd(i);
     const uint32_t tile = uint32_t(pairs[i] >> 32);
-    uint32_t& next = cb.start[tile];
+    // (The run's first place in a local: stored through items, which may alias cb.start, it
+    // would be read again for every item.)
+    const uint32_t at = cb.start[tile];
+    cb.start[tile] = at + uint32_t(j - i);
     for (size_t k = i; k < j; ++k) {
-      cb.items[next + (k - i)] = itemOf(uint32_t(pairs[k]));
+      const uint32_t place = at + uint32_t(k - i);
+      items[place] = itemOf(uint32_t(pairs[k]));
       // Next to the item: the tile pass reads them in order.
-      cb.itemNearest[next + (k - i)] = nearestOf(localIndex(uint32_t(pairs[k])));
-      placed(next + uint32_t(k - i), tile, uint32_t(pairs[k]));
+      itemNearest[place] = nearestOf(localIndex(uint32_t(pairs[k])));
+      placed(place, tile, uint32_t(pairs[k]));
     }
-    next += uint32_t(j - i);
   }
   for (size_t t = tiles; t > 0; --t) cb.start[t] = cb.start[t - 1];  // back to the beginnings
   cb.start[0] = 0;
