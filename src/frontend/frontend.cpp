@@ -511,7 +511,6 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
     constexpr size_t kGroup = 32;  // meshes whose corners are transformed together
     dvec3 corners[8 * kGroup];
     uint8_t codes[8 * kGroup];
-    ProjectedVertex projected[8 * kGroup];  // (not used)
     for (size_t g = first; g < last; g += kGroup) {
       const size_t n = std::min(last - g, kGroup);
       for (size_t m = 0; m < n; ++m) {
@@ -519,7 +518,7 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
         for (int c = 0; c < 8; ++c)
           corners[8 * m + c] = {c & 1 ? b.hi.x : b.lo.x, c & 2 ? b.hi.y : b.lo.y, c & 4 ? b.hi.z : b.lo.z};
       }
-      transformVertices(corners, 8 * n, pixelFromWorld, cam, codes, projected);
+      transformVertices(corners, 8 * n, pixelFromWorld, cam, codes, nullptr);  // (outcodes only)
       for (size_t m = 0; m < n; ++m) {
         uint8_t all = codes[8 * m];
         for (int c = 1; c < 8; ++c) all &= codes[8 * m + c];

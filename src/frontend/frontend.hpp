@@ -251,7 +251,8 @@ uint32_t clipOutcode(const HVertex& v, const Camera& cam);
 
 /// The vertex pass of vertices [0, count), with SIMD (frontend/setup_batch.cpp): with h =
 /// transformVertex(positions[i], M), outcodes[i] = clipOutcode(h) and, when that is 0,
-/// projected[i] = projectVertex(h) — bit for bit those functions' results. (The homogeneous
+/// projected[i] = projectVertex(h) — bit for bit those functions' results; `projected` null: the
+/// outcodes only (a mesh's box corners: four divisions less per vertex). (The homogeneous
 /// vertices themselves are not kept: the few triangles that need clipping transform theirs
 /// again, to the same bits.)
 void transformVertices(const dvec3* positions, size_t count, const dmat4& M, const Camera& cam, uint8_t* outcodes,

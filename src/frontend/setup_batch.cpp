@@ -594,9 +594,7 @@ void TransformVertices(const dvec3* positions, size_t count, const dmat4& matrix
     const M outside[6] = {hn::Lt(hn::Sub(depth, nearV), zero),      hn::Lt(hn::Sub(farV, depth), zero),
                           hn::Lt(hn::Sub(hx, hn::Mul(gx0, w)), zero), hn::Lt(hn::Sub(hn::Mul(gx1, w), hx), zero),
                           hn::Lt(hn::Sub(hy, hn::Mul(gy0, w)), zero), hn::Lt(hn::Sub(hn::Mul(gy1, w), hy), zero)};
-    // projectVertex: every lane.
-    const V sx = hn::Div(hx, w), sy = hn::Div(hy, w);
-    const V num = hn::Div(depth, w), den = hn::Div(one, w);
+    // projectVertex: every lane (unless only the outcodes are asked for).
     // The six masks as the rows of an 8x8 bit matrix (byte p, bit j: lane j outside plane p),
     // transposed (Hacker's Delight 7-3): byte j becomes lane j's outcode.
     uint64_t matrix = 0;
@@ -612,6 +610,9 @@ void TransformVertices(const dvec3* positions, size_t count, const dmat4& matrix
     matrix = (matrix & 0xF0F0F0F00F0F0F0Full) | ((matrix & 0x00000000F0F0F0F0ull) << 28) |
              ((matrix >> 28) & 0x00000000F0F0F0F0ull);
     for (size_t j = 0; j < lanes; ++j) outcodes[first + j] = uint8_t(matrix >> (8 * j));
+    if (!projected) continue;
+    const V sx = hn::Div(hx, w), sy = hn::Div(hy, w);
+    const V num = hn::Div(depth, w), den = hn::Div(one, w);
     if (lanes == N) {  // N whole records at once (a vertex outside gets values no triangle reads)
       static_assert(sizeof(ProjectedVertex) == 4 * sizeof(double));
       hn::StoreInterleaved4(sx, sy, num, den, d, reinterpret_cast<double*>(projected + first));
