@@ -39,6 +39,14 @@ inline constexpr double kDepthScale = S == DepthStorage::U16   ? 65535.0
                                       : S == DepthStorage::U24 ? 16777215.0
                                                                : 4294967295.0;
 
+/// kDepthScale of a storage chosen at run time; 1 for float (its stored value is the mapped one).
+inline double depthScaleOf(DepthStorage s) {
+  return s == DepthStorage::F32   ? 1.0
+         : s == DepthStorage::U16 ? kDepthScale<DepthStorage::U16>
+         : s == DepthStorage::U24 ? kDepthScale<DepthStorage::U24>
+                                  : kDepthScale<DepthStorage::U32>;
+}
+
 /// A mapped value v in [0, 1] as stored: rounded to float, or to the nearest integer code.
 template <DepthStorage S>
 inline DepthT<S> quantizeDepth(double v) {

@@ -137,9 +137,7 @@ HWY_INLINE V NearestStored(const DepthSetup& depth, const PlaneV& N, const Plane
   if (storage == DepthStorage::F32) {
     v = hn::PromoteTo(d, hn::DemoteTo(hn::Rebind<float, D>(), v));
   } else {  // v * scale + 0.5, truncated (v >= 0: floor)
-    const double scale = storage == DepthStorage::U16   ? kDepthScale<DepthStorage::U16>
-                         : storage == DepthStorage::U24 ? kDepthScale<DepthStorage::U24>
-                                                        : kDepthScale<DepthStorage::U32>;
+    const double scale = depthScaleOf(storage);
     v = hn::Floor(hn::Add(hn::Mul(v, hn::Set(d, scale)), hn::Set(d, 0.5)));
   }
   return hn::IfThenElse(bounded, v, hn::Set(d, greater ? inf : -inf));

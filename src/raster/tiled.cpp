@@ -354,7 +354,7 @@ namespace {
 
 // Eye depth as 1 / (alpha + beta stored) — a perspective camera's z, reversed and inv mappings
 // map 1 / eye depth affinely — or, when `eye` is false (orthographic or linear: the stored value
-// is already affine in eye depth), the stored value itself, with `nearer` its direction.
+// is already affine in eye depth), the stored value itself.
 struct OrderKey {
   bool eye = false;
   double alpha = 0, beta = 0;
@@ -365,10 +365,7 @@ OrderKey orderKeyOf(const DepthSetup& depth) {
   const DepthMapping mapping = depth.format.mapping;
   if (depth.orthographic || mapping == DepthMapping::Linear) return k;
   const double n = depth.near, f = depth.far;
-  const double scale = depth.format.storage == DepthStorage::F32   ? 1.0
-                       : depth.format.storage == DepthStorage::U16 ? kDepthScale<DepthStorage::U16>
-                       : depth.format.storage == DepthStorage::U24 ? kDepthScale<DepthStorage::U24>
-                                                                   : kDepthScale<DepthStorage::U32>;
+  const double scale = depthScaleOf(depth.format.storage);
   k.eye = true;
   if (mapping == DepthMapping::Z) k.alpha = 1 / n, k.beta = -(f - n) / (f * n) / scale;  // unmapDepth<Z>
   else if (mapping == DepthMapping::Reversed) k.alpha = 1 / f, k.beta = (f - n) / (n * f) / scale;
