@@ -358,6 +358,9 @@ namespace {
 struct OrderKey {
   bool eye = false;
   double alpha = 0, beta = 0;
+  // (One expression for the extremes and every entry: rounding keeps it monotonic in `stored`,
+  // so every entry's key lies between the extremes' keys.)
+  double eyeOf(double stored) const { return 1 / (alpha + beta * stored); }
 };
 
 OrderKey orderKeyOf(const DepthSetup& depth) {
@@ -405,7 +408,7 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, const DepthS
   OrderKey key = orderKeyOf(depth);
   double keyLo = lo, keyHi = hi;  // (the key is monotonic in the stored value)
   if (key.eye) {
-    const double eyeLo = 1 / (key.alpha + key.beta * lo), eyeHi = 1 / (key.alpha + key.beta * hi);
+    const double eyeLo = key.eyeOf(lo), eyeHi = key.eyeOf(hi);
     keyLo = std::min(eyeLo, eyeHi), keyHi = std::max(eyeLo, eyeHi);
     if (!(keyLo > 0) || !std::isfinite(keyHi) || !(keyHi > 1.25 * keyLo)) key.eye = false, keyLo = lo, keyHi = hi;
   }
@@ -419,7 +422,7 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, const DepthS
   uint8_t* bucket = order.bucket.data();
   const size_t count = in.size();
   if (key.eye) {
-    for (size_t i = 0; i < count; ++i) bucket[i] = uint8_t((1 / (key.alpha + key.beta * in[i].nearest) - origin) * sign);
+    for (size_t i = 0; i < count; ++i) bucket[i] = uint8_t((key.eyeOf(in[i].nearest) - origin) * sign);
   } else {
     for (size_t i = 0; i < count; ++i) bucket[i] = uint8_t((in[i].nearest - origin) * sign);
   }
