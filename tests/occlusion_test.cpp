@@ -5,11 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <fmt/format.h>
 #include <random>
 
 #include "core/depth_map.hpp"
+#include "frontend/frontend.hpp"
+#include "raster/fragment_depth.hpp"
 #include "test_scenes.hpp"
 
 namespace hsr {
@@ -233,6 +236,107 @@ TEST(Occlusion, BoxVisibleNeverHidesAVisibleBox) {
   EXPECT_GT(shown, 50);
   EXPECT_GT(hiddenTruth, 50);
   EXPECT_GT(hiddenReported * 2, hiddenTruth) << "most hidden boxes are found hidden";
+}
+
+// Cameras for the mesh culling tests: the scene's own, then seeded random perspective poses
+// looking in from around it, some from inside its box, with wide and narrow lenses.
+std::vector<Camera> meshCameras(const Scene& scene, int w, int h, int random, uint64_t seed) {
+  std::vector<Camera> list{cameraFor(scene, w, h, 0), cameraFor(scene, w, h, 1)};
+  const Bounds3 b = scene.bounds();
+  const dvec3 c = b.center();
+  const double r = glm::length(b.hi - b.lo) * 0.5;
+  std::mt19937_64 rng(seed);
+  auto u = [&] { return double(rng() >> 11) * 0x1.0p-53; };
+  for (int i = 0; i < random; ++i) {
+    const double z = u() * 2 - 1, phi = u() * 2 * M_PI, sz = std::sqrt(1 - z * z);
+    const dvec3 eye = c + dvec3(sz * std::cos(phi), z, sz * std::sin(phi)) * (r * (0.1 + 2 * u()));
+    const dvec3 target = c + dvec3(u() - 0.5, u() - 0.5, u() - 0.5) * r;
+    list.push_back(resolveCamera(test::lookAt(eye, target, 20 + 80 * u(), r * 0.002, r * 5), w, h, b));
+  }
+  return list;
+}
+
+// meshBound (the occlusion buffer's mesh culling): for every mesh it bounds, every triangle is
+// inside the clip volume and its own set-up (setupTriangle) lies in the mesh's pixel box with a
+// nearest bound no nearer than the mesh's, in every depth format; a mesh found Outside has no
+// triangle that covers a pixel centre. Box buildings (city) and turned boxes, walls and
+// slivers (rotatedBoxes), seen from many sides.
+TEST(Occlusion, MeshBoundHoldsForEveryTriangle) {
+  size_t bounded = 0, outside = 0, triangles = 0;
+  for (const Scene& scene : {loadScene("builtin:city"), test::rotatedBoxes(400, 5)})
+    for (auto [w, h] : {std::pair{256, 160}, std::pair{1920, 1080}})
+      for (const Camera& cam : meshCameras(scene, w, h, 6, 23)) {
+        FrontEndOutput fe;
+        runVertexPass(scene, cam, RenderOptions{}, fe);
+        for (const DepthFormat& format : everyFormat()) {
+          const DepthSetup depth{format, cam.near, cam.far, cam.orthographic};
+          const MeshView view = meshView(cam, depth);
+          const bool greater = format.greaterWins();
+          for (size_t m = 0; m < scene.meshes.size(); ++m) {
+            MeshBound b;
+            const MeshTest test = meshBound(scene, m, view, b);
+            if (test == MeshTest::None) continue;
+            ++(test == MeshTest::Bounded ? bounded : outside);
+            const MeshRange& mesh = scene.meshes[m];
+            for (uint32_t i = mesh.firstTriangle; i < mesh.firstTriangle + mesh.triangleCount; ++i) {
+              const Triangle& t = scene.triangles[i];
+              ProjectedVertex v[3];
+              for (int j = 0; j < 3; ++j) {
+                ASSERT_EQ(fe.outcodes[t.v[j]], 0) << "mesh " << m << " triangle " << i;
+                v[j] = fe.projected[t.v[j]];
+              }
+              SetupTriangle st;
+              FrontEndCounters counters;
+              if (!setupTriangle(v, i, t.face, cam, Cull::None, counters, st)) continue;
+              ASSERT_EQ(test, MeshTest::Bounded) << "mesh " << m << " was found outside but triangle " << i << " draws";
+              ++triangles;
+              EXPECT_TRUE(st.minX >= b.minX && st.maxX <= b.maxX && st.minY >= b.minY && st.maxY <= b.maxY)
+                  << "mesh " << m << " triangle " << i;
+              const double own = nearestStored(st, depth);
+              ASSERT_TRUE(greater ? own <= b.nearest : own >= b.nearest)
+                  << fmt::format("mesh {} triangle {} {}: own nearest {} mesh's {}", m, i, format.name(), own, b.nearest);
+            }
+          }
+        }
+      }
+  RecordProperty("bounded", int(bounded));
+  RecordProperty("outside", int(outside));
+  RecordProperty("triangles", int(triangles));
+  EXPECT_GT(bounded, 50000u);
+  EXPECT_GT(outside, 1000u);
+  EXPECT_GT(triangles, 500000u);
+}
+
+// Mesh culling changes no stored value: the occlusion buffer with it (the default) and without
+// (HSR_MESH_CULLING=off) stores the same bits at every pixel, culling back faces or not, in
+// several formats, on 1 and 2 threads; and it does cull (the city's hidden buildings).
+TEST(Occlusion, MeshCullingChangesNoStoredValue) {
+  uint64_t culled = 0, passes = 0;
+  int compared = 0;
+  for (const Scene& scene : {loadScene("builtin:city"), test::rotatedBoxes(400, 9)})
+    for (const Camera& cam : meshCameras(scene, 320, 200, 4, 31))
+      for (const char* f : {"f32:reversed", "u16:z", "u24:inv", "u32:linear", "f32:z"})
+        for (Cull cull : {Cull::None, Cull::Back})
+          for (int threads : {1, 2}) {
+            const DepthFormat format = DepthFormat::parse(f);
+            const std::string what = fmt::format("{} {} cull {} threads {}", scene.source, f, int(cull), threads);
+            OcclusionBuffer without, with;
+            setenv("HSR_MESH_CULLING", "off", 1);
+            const Stats plain = without.render(scene, cam, {format, cull, threads});
+            unsetenv("HSR_MESH_CULLING");
+            const Stats& st = with.render(scene, cam, {format, cull, threads});
+            EXPECT_FALSE(plain.meshes_culled_occlusion.has_value()) << what;
+            culled += st.meshes_culled_occlusion.value_or(0);
+            passes += st.occlusion_passes.value_or(0) > 1;
+            ++compared;
+            for (int y = 0; y < cam.height; ++y)
+              for (int x = 0; x < cam.width; ++x)
+                ASSERT_EQ(with.storedAt(x, y), without.storedAt(x, y)) << what << " pixel " << x << "," << y;
+          }
+  RecordProperty("meshes_culled", int(culled));
+  EXPECT_EQ(compared, 2 * 6 * 5 * 2 * 2);
+  EXPECT_GT(passes, 50u);
+  EXPECT_GT(culled, 10000u);
 }
 
 TEST(Occlusion, BadUseIsAClearError) {

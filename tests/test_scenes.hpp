@@ -2,7 +2,10 @@
 #pragma once
 #include <hsr/hsr.hpp>
 
+#include <array>
+#include <cmath>
 #include <cstring>
+#include <string>
 #include <random>
 
 namespace hsr::test {
@@ -48,6 +51,48 @@ inline Scene randomSoup(int n, uint64_t seed, double size = 0.6) {
     uint32_t b = uint32_t(s.positions.size());
     for (int k = 0; k < 3; ++k) s.positions.push_back(c + size * dvec3(u() - 0.5, u() - 0.5, u() - 0.5));
     s.addFace({b, b + 1, b + 2}, Rgba8{uint8_t(rng()), uint8_t(rng()), uint8_t(rng()), 255});
+  }
+  s.finalize();
+  return s;
+}
+
+/// `n` meshes in a cube of side 2 around the origin, intersecting each other: boxes turned at
+/// random (some thin as walls), and every fifth a single triangle, some of them slivers.
+inline Scene rotatedBoxes(int n, uint64_t seed) {
+  Scene s;
+  s.source = "test:rotated-boxes";
+  std::mt19937_64 rng(seed);
+  auto u = [&] { return double(rng() >> 11) * 0x1.0p-53; };
+  for (int i = 0; i < n; ++i) {
+    s.beginMesh("mesh " + std::to_string(i));
+    const dvec3 c{u() * 2 - 1, u() * 2 - 1, u() * 2 - 1};
+    const Rgba8 color{uint8_t(rng()), uint8_t(rng()), uint8_t(rng()), 255};
+    const uint32_t b = uint32_t(s.positions.size());
+    if (i % 5 == 4) {
+      const double sliver = i % 10 == 9 ? 1e-4 : 1;
+      const dvec3 a{u() - 0.5, u() - 0.5, u() - 0.5}, d{u() - 0.5, u() - 0.5, u() - 0.5};
+      s.positions.push_back(c);
+      s.positions.push_back(c + 0.6 * a);
+      s.positions.push_back(c + 0.6 * (a + sliver * d));
+      s.addFace({b, b + 1, b + 2}, color);
+      continue;
+    }
+    // An orthonormal frame from a random unit quaternion; half sizes, one of them thin at times.
+    double q[4];
+    double len = 0;
+    for (double& v : q) v = u() * 2 - 1, len += v * v;
+    for (double& v : q) v /= std::sqrt(len);
+    const auto [w, x, y, z] = std::array<double, 4>{q[0], q[1], q[2], q[3]};
+    const dvec3 axes[3] = {{1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)},
+                           {2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)},
+                           {2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)}};
+    dvec3 half{0.05 + 0.25 * u(), 0.05 + 0.25 * u(), 0.05 + 0.25 * u()};
+    if (i % 3 == 0) half.z = 0.002;
+    for (int k = 0; k < 8; ++k)
+      s.positions.push_back(c + axes[0] * (k & 1 ? half.x : -half.x) + axes[1] * (k & 2 ? half.y : -half.y) +
+                            axes[2] * (k & 4 ? half.z : -half.z));
+    const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (auto& f : quads) s.addFace({b + f[0], b + f[1], b + f[2], b + f[3]}, color);
   }
   s.finalize();
   return s;

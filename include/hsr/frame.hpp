@@ -82,6 +82,10 @@ struct Stats {
   // the front end did not set up but deferred to the tile pass, the clusters (runs of 32) among them,
   // and the deferred triangles the tile pass set up because they might show.
   std::optional<uint64_t> triangles_deferred, clusters_deferred, triangles_set_up_late;
+  // The occlusion buffer's mesh culling (README, Performance): the passes it drew the scene in,
+  // nearest meshes first; the meshes found hidden whole behind what the passes before had drawn,
+  // and their triangles, never set up.
+  std::optional<uint64_t> occlusion_passes, meshes_culled_occlusion, triangles_culled_occlusion;
 
   double overdraw() const { return covered_pixels ? double(color_writes) / double(covered_pixels) : 0.0; }
   void addTime(const std::string& stage, double ms);

@@ -25,7 +25,25 @@ struct MeshRange {
   uint32_t firstFace = 0;
   uint32_t faceCount = 0;
   Bounds3 bounds;  // of its faces' vertices; filled by Scene::finalize() (view culling per mesh)
+  // Filled by Scene::finalize(): its triangles, Scene::triangles[firstTriangle, + triangleCount)
+  // (faces in order, so a mesh's triangles are together), and the planes they lie in,
+  // Scene::meshPlanes[firstPlane, + planeCount) — 0 planes when the mesh has more than
+  // kMaxMeshPlanes or a triangle that is not well shaped: then a renderer cannot test it whole
+  // for occlusion (the occlusion buffer's mesh culling, raster/tiled.hpp).
+  uint32_t firstTriangle = 0, triangleCount = 0;
+  uint32_t firstPlane = 0, planeCount = 0;
 };
+
+/// A plane n . x = d that triangles of a mesh lie in, with room: each such triangle's own unit
+/// normal n_t = normalize((v1 - v0) x (v2 - v0)) and offset d_t = n_t . v0, as computed in
+/// double, are within nSlack of n (Euclidean) and dSlack of d, so a point e is at least
+/// |d - n . e| - dSlack - nSlack |e| from the triangle's plane (up to the rounding of n_t, d_t).
+struct MeshPlane {
+  dvec3 n{0.0};
+  double d = 0, nSlack = 0, dSlack = 0;
+};
+/// Planes kept per mesh, at most (a box has 6; a mesh with more is not tested whole).
+inline constexpr uint32_t kMaxMeshPlanes = 16;
 
 /// Triangles [kClusterTriangles i, kClusterTriangles (i + 1)) of a scene (Scene::clusters), with
 /// what a renderer needs to decide about all of them at once from a camera: the tiled z-buffer
@@ -69,6 +87,8 @@ struct Scene {
   // Filled by finalize(): one per kClusterTriangles triangles (the last one may be short; then it
   // is not usable). Normals are (v1 - v0) x (v2 - v0) of the triangles' vertices.
   std::vector<TriangleCluster> clusters;
+  // Filled by finalize(): the planes of the meshes (MeshRange::firstPlane, planeCount).
+  std::vector<MeshPlane> meshPlanes;
 
   std::optional<CameraSpec> camera;  // a camera stored in the scene file, if any
 

@@ -38,39 +38,43 @@ bool deferClusters() {
 }
 
 void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt, const DepthSetup& depth,
-                 TiledState& state) {
+                 TiledState& state, const FrontEndOutput* vertices, const std::vector<TriangleRange>* only) {
   const size_t triangles = scene.triangles.size(), perChunk = chunkTrianglesFor(triangles);
   tiled::prepareBins(state.bins, cam.width, cam.height, (triangles + perChunk - 1) / perChunk);
-  runFrontEnd(
-      scene, cam, opt, state.fe,
-      [&](size_t chunk) {
-        state.bins.chunks[chunk].producer = uint32_t(currentPart());  // (for assignUnits)
-        tiled::binChunk(state.bins, chunk, state.fe.chunks[chunk], &depth);
-      },
-      &depth, deferBackFaces(opt), deferClusters());
-  state.bins.projected = state.fe.projected.data();  // (for setting deferred triangles up)
+  const ChunkConsumer bin = [&](size_t chunk) {
+    state.bins.chunks[chunk].producer = uint32_t(currentPart());  // (for assignUnits)
+    tiled::binChunk(state.bins, chunk, state.fe.chunks[chunk], &depth);
+  };
+  if (vertices)
+    runSetUp(scene, cam, opt, *vertices, state.fe, bin, &depth, deferBackFaces(opt), deferClusters(), only);
+  else
+    runFrontEnd(scene, cam, opt, state.fe, bin, &depth, deferBackFaces(opt), deferClusters());
+  state.bins.projected = (vertices ? *vertices : state.fe).projected.data();  // (for setting deferred triangles up)
   state.bins.camera = &cam;
   state.bins.sceneTriangles = scene.triangles.data();
 }
 
-int prepareTilePass(TiledState& state, int threads) {
+int prepareTilePass(TiledState& state, int threads, std::vector<uint32_t>* touched) {
   const tiled::Bins& bins = state.bins;
-  // Every binned pair and deferred face, chunk by chunk (not tile by tile: that is a pass over
-  // every chunk's lists per tile, on one thread).
   const size_t tiles = size_t(bins.tileCount());
-  size_t work = tiles * kWorkPerTile;
-  for (size_t c = 0; c < bins.chunkCount; ++c)
-    work += bins.chunks[c].items.size() + bins.late[c].items.size() + bins.clusters[c].items.size();
-  const int workers = int(std::clamp<size_t>(work / kWorkPerThread, 1, size_t(threads)));
-  if (state.orders.size() < size_t(workers)) state.orders.resize(size_t(workers));
   // Every worker's lists sized for the fullest tile (which worker meets which tile varies from
   // frame to frame: sized by the tiles met, a warm frame could still allocate).
   state.bins.countEntries();
   size_t most = 0, mostLate = 0;
+  if (touched) touched->clear();
   for (size_t t = 0; t < tiles; ++t) {
     most = std::max<size_t>(most, bins.tileEntries[t]);
-    mostLate = std::max<size_t>(mostLate, bins.tileEntries[tiles + t] + bins.tileEntries[2 * tiles + t] * kClusterTriangles);
+    const size_t late = bins.tileEntries[tiles + t] + bins.tileEntries[2 * tiles + t] * kClusterTriangles;
+    mostLate = std::max<size_t>(mostLate, late);
+    if (touched && bins.tileEntries[t] + late > 0) touched->push_back(uint32_t(t));
   }
+  // Every binned pair and deferred face, chunk by chunk (not tile by tile: that is a pass over
+  // every chunk's lists per tile, on one thread).
+  size_t work = (touched ? touched->size() : tiles) * kWorkPerTile;
+  for (size_t c = 0; c < bins.chunkCount; ++c)
+    work += bins.chunks[c].items.size() + bins.late[c].items.size() + bins.clusters[c].items.size();
+  const int workers = int(std::clamp<size_t>(work / kWorkPerThread, 1, size_t(threads)));
+  if (state.orders.size() < size_t(workers)) state.orders.resize(size_t(workers));
   for (tiled::TileOrder& order : state.orders) {
     order.entries.reserve(most);
     order.ordered.reserve(most);

@@ -41,13 +41,17 @@ bool deferClusters();
 
 /// Sets up the scene's triangles (runFrontEnd) and bins each chunk on the worker that set it up,
 /// while it is in that core's cache.
+/// With `vertices` (the frame's vertex pass, runVertexPass), set-up only, of the triangles of
+/// `only` (runSetUp), into state.fe's chunks.
 void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt, const DepthSetup& depth,
-                 TiledState& state);
+                 TiledState& state, const FrontEndOutput* vertices = nullptr,
+                 const std::vector<TriangleRange>* only = nullptr);
 
 /// How many workers the binned frame's tile pass is worth (at most `threads`; small frames run
 /// on fewer, as handing work to a pool thread costs about as much as the kernel spends on ~4000
 /// small triangles), with one visit list each, and the per-tile counters cleared.
-int prepareTilePass(TiledState& state, int threads);
+/// With `touched`: a pass over only the tiles that have items, listed there in order.
+int prepareTilePass(TiledState& state, int threads, std::vector<uint32_t>* touched = nullptr);
 
 /// Hands the tile pass's `units` to its `workers` (state.tileWork, parts [0, workers)): unit u is
 /// the tiles [tilesOf(u).first, + tilesOf(u).second) of one tile row; each goes first to the

@@ -46,6 +46,9 @@ std::string Stats::toJson(int indent) const {
   if (triangles_deferred) j["triangles_deferred"] = *triangles_deferred;
   if (clusters_deferred) j["clusters_deferred"] = *clusters_deferred;
   if (triangles_set_up_late) j["triangles_set_up_late"] = *triangles_set_up_late;
+  if (occlusion_passes) j["occlusion_passes"] = *occlusion_passes;
+  if (meshes_culled_occlusion) j["meshes_culled_occlusion"] = *meshes_culled_occlusion;
+  if (triangles_culled_occlusion) j["triangles_culled_occlusion"] = *triangles_culled_occlusion;
   if (wrong_pixels) j["wrong_pixels"] = *wrong_pixels;
   if (ambiguous_pixels) j["ambiguous_pixels"] = *ambiguous_pixels;
   return j.dump(indent);

@@ -1,7 +1,9 @@
 // Geometry front end (see frontend.hpp): transform, clip, project, snap, cull, set up.
 #include "frontend/frontend.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/depth_map.hpp"
 #include "core/parallel.hpp"
@@ -224,39 +226,20 @@ namespace {
 
 constexpr double kAway = 0.1;  // the facing margin (step 1 above)
 
-// What deferCluster and cullCluster share: the facing test (step 1), the clip volume with room
-// to spare, the least and greatest eye depth of the box's corners (conservative) and the
-// extremes of their pixel positions.
-struct ClusterInView {
-  double dist, radius;  // from the eye to the bounding sphere's centre; its radius
+// A box whose every corner lies inside the clip volume with room to spare (so no triangle
+// inside it is clipped), with the least and greatest eye depth of its corners (conservative) and
+// the extremes of their pixel positions. What deferCluster, cullCluster and meshBound share.
+struct BoxInView {
   double zMin, zMax;
   double x0, y0, x1, y1;
 };
-bool clusterInView(const TriangleCluster& cl, const ClusterView& view, const Camera& cam, const dmat4& M,
-                   ClusterInView& out) {
-  if (!view.enabled || !cl.usable) return false;
-  // 1. Facing away by a margin (cheapest test first: most clusters that fail, fail here).
-  const dvec3 centre = cl.bounds.center();
-  const double radius = 0.5 * glm::length(cl.bounds.hi - cl.bounds.lo) * (1 + 1e-12);
-  const dvec3 toCentre = centre - view.eye;
-  const double dist = glm::length(toCentre);
-  if (!(dist > 1.001 * radius)) return false;
-  const double cosB = glm::dot(cl.axis, toCentre) / dist;
-  if (!(cosB > 0)) return false;
-  const double sinB = std::sqrt(std::max(0.0, 1 - cosB * cosB));
-  const double sinG = radius / dist, cosG = std::sqrt(1 - sinG * sinG);
-  const double cosBG = cosB * cosG - sinB * sinG, sinBG = sinB * cosG + cosB * sinG;
-  if (!(cosBG >= 0)) return false;  // beta + gamma <= pi/2 (both are in [0, pi/2))
-  const double cosA = cl.cosCone, sinA = std::sqrt(std::max(0.0, 1 - cosA * cosA));  // alpha <= pi/3
-  if (!(cosBG * cosA - sinBG * sinA >= kAway)) return false;
-  // Inside the clip volume with room to spare; depth and pixel extremes of the corners.
-  out.dist = dist, out.radius = radius;
+bool boxInView(const Bounds3& box, const Camera& cam, const dmat4& M, BoxInView& out) {
   out.zMin = out.x0 = out.y0 = std::numeric_limits<double>::infinity();
   out.zMax = out.x1 = out.y1 = -out.zMin;
   const double planeScale = 2 * kGuardBandPixels + cam.width + cam.height + 1;
   // The magnitudes of the corners' terms, bounded once for the box: |M[j][r] p_j| at the box's
   // largest |p_j| (at least every corner's own: the margins below only grow).
-  const dvec3 most = glm::max(glm::abs(cl.bounds.lo), glm::abs(cl.bounds.hi));
+  const dvec3 most = glm::max(glm::abs(box.lo), glm::abs(box.hi));
   auto terms = [&](int r) {
     return std::abs(M[0][r] * most.x) + std::abs(M[1][r] * most.y) + std::abs(M[2][r] * most.z) + std::abs(M[3][r]);
   };
@@ -267,7 +250,7 @@ bool clusterInView(const TriangleCluster& cl, const ClusterView& view, const Cam
   // added in the same order), each product once: corner c takes lo or hi by its bits 1, 2, 4.
   double term[3][4][2];  // [axis][row][lo, hi]
   for (int r = 0; r < 4; ++r)
-    for (int j = 0; j < 3; ++j) term[j][r][0] = M[j][r] * cl.bounds.lo[j], term[j][r][1] = M[j][r] * cl.bounds.hi[j];
+    for (int j = 0; j < 3; ++j) term[j][r][0] = M[j][r] * box.lo[j], term[j][r][1] = M[j][r] * box.hi[j];
   HVertex corner[8];
   bool inside = true;
   for (int c = 0; c < 8; ++c) {
@@ -288,31 +271,69 @@ bool clusterInView(const TriangleCluster& cl, const ClusterView& view, const Cam
   return out.zMin > 0;
 }
 
-}  // namespace
+// What deferCluster and cullCluster share: the facing test (step 1) and the box in view.
+struct ClusterInView : BoxInView {
+  double dist, radius;  // from the eye to the bounding sphere's centre; its radius
+};
+bool clusterInView(const TriangleCluster& cl, const ClusterView& view, const Camera& cam, const dmat4& M,
+                   ClusterInView& out) {
+  if (!view.enabled || !cl.usable) return false;
+  // 1. Facing away by a margin (cheapest test first: most clusters that fail, fail here).
+  const dvec3 centre = cl.bounds.center();
+  const double radius = 0.5 * glm::length(cl.bounds.hi - cl.bounds.lo) * (1 + 1e-12);
+  const dvec3 toCentre = centre - view.eye;
+  const double dist = glm::length(toCentre);
+  if (!(dist > 1.001 * radius)) return false;
+  const double cosB = glm::dot(cl.axis, toCentre) / dist;
+  if (!(cosB > 0)) return false;
+  const double sinB = std::sqrt(std::max(0.0, 1 - cosB * cosB));
+  const double sinG = radius / dist, cosG = std::sqrt(1 - sinG * sinG);
+  const double cosBG = cosB * cosG - sinB * sinG, sinBG = sinB * cosG + cosB * sinG;
+  if (!(cosBG >= 0)) return false;  // beta + gamma <= pi/2 (both are in [0, pi/2))
+  const double cosA = cl.cosCone, sinA = std::sqrt(std::max(0.0, 1 - cosA * cosA));  // alpha <= pi/3
+  if (!(cosBG * cosA - sinBG * sinA >= kAway)) return false;
+  out.dist = dist, out.radius = radius;
+  return boxInView(cl.bounds, cam, M, out);
+}
 
-bool deferCluster(const TriangleCluster& cl, const ClusterView& view, const Camera& cam, const dmat4& M,
-                  const DepthSetup& depth, DeferredCluster& out) {
-  ClusterInView in;
-  if (depth.orthographic || !clusterInView(cl, view, cam, M, in)) return false;
-  // Pixels whose centres a triangle inside may cover: centres x + 1/2 within 1/256 of a pixel of
-  // [x0, x1] (snapping moves a vertex by 1/512; the rest is room for rounding, ~1e-12 relative).
-  // (Rather than a whole pixel of margin each side: sphere, a sixth fewer triangles set up late.)
+// Pixels whose centres a triangle inside a box in view may cover: centres x + 1/2 within 1/256
+// of a pixel of [x0, x1] (snapping moves a vertex by 1/512; the rest is room for rounding, ~1e-12
+// relative). (Rather than a whole pixel of margin each side: sphere, a sixth fewer triangles set
+// up late.) False when no centre of the image is in it.
+bool pixelBoxOf(const BoxInView& in, const Camera& cam, int16_t& minX, int16_t& minY, int16_t& maxX, int16_t& maxY) {
   constexpr double kRoom = 1.0 / 256;
   const double bx0 = std::max(0.0, std::ceil(in.x0 - 0.5 - kRoom));
   const double bx1 = std::min(double(cam.width - 1), std::floor(in.x1 - 0.5 + kRoom));
   const double by0 = std::max(0.0, std::ceil(in.y0 - 0.5 - kRoom));
   const double by1 = std::min(double(cam.height - 1), std::floor(in.y1 - 0.5 + kRoom));
   if (!(bx0 <= bx1 && by0 <= by1)) return false;
-  out.minX = int16_t(bx0), out.maxX = int16_t(bx1), out.minY = int16_t(by0), out.maxY = int16_t(by1);
+  minX = int16_t(bx0), maxX = int16_t(bx1), minY = int16_t(by0), maxY = int16_t(by1);
+  return true;
+}
+
+// Eye depth d (perspective) as a stored value of `depth`, mapped, then moved 1e-9 of itself
+// nearer, clamped and rounded to storage (all monotone): step 4's room for rounding.
+double storedNearest(double d, const DepthSetup& depth) {
+  double out = 0;
+  visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping Map>() {
+    double v = mapDepth<Map>(d, depth.near, depth.far, false);
+    v = depth.format.greaterWins() ? v + std::abs(v) * 1e-9 : v - std::abs(v) * 1e-9;
+    out = double(quantizeDepth<S>(std::clamp(v, 0.0, 1.0)));
+  });
+  return out;
+}
+
+}  // namespace
+
+bool deferCluster(const TriangleCluster& cl, const ClusterView& view, const Camera& cam, const dmat4& M,
+                  const DepthSetup& depth, DeferredCluster& out) {
+  ClusterInView in;
+  if (depth.orthographic || !clusterInView(cl, view, cam, M, in)) return false;
+  if (!pixelBoxOf(in, cam, out.minX, out.minY, out.maxX, out.maxY)) return false;
   // 2.-4. The largest D, as an eye depth, mapped and stored.
   const double gradient = view.gradient() / (0.5 * kAway * (in.dist - in.radius));
   const double largestD = (1 / in.zMin) * (1 + 1e-6) + 2 * gradient / double(kSubpixelOne);
-  const double nearestDepth = (1 / largestD) * (1 - 1e-12);
-  visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping Map>() {
-    double v = mapDepth<Map>(nearestDepth, depth.near, depth.far, false);
-    v = depth.format.greaterWins() ? v + std::abs(v) * 1e-9 : v - std::abs(v) * 1e-9;
-    out.nearest = double(quantizeDepth<S>(std::clamp(v, 0.0, 1.0)));
-  });
+  out.nearest = storedNearest((1 / largestD) * (1 - 1e-12), depth);
   return std::isfinite(out.nearest);
 }
 
@@ -336,6 +357,90 @@ bool cullCluster(const TriangleCluster& cl, const ClusterView& view, const Camer
   const double edge = (view.fx + std::abs(view.skew) + view.fy + U + V) * cl.maxEdge * (1 + 1e-9) / in.zMin;
   const double delta = (1.0 / (2 * kSubpixelOne)) * (1 + 1e-6);
   return 2 * area > 4 * delta * edge + 8 * delta * delta;
+}
+
+// Why meshBound's box and bound hold for every fragment of the mesh's triangles: as for a
+// deferred cluster (steps 2.-4. above), with step 1's distance c from the eye to each triangle's
+// plane taken from the mesh's planes instead of a normal cone: at least |d - n . e| - dSlack -
+// nSlack |e| (MeshPlane), less 1e-9 of the magnitudes involved for the rounding of each
+// triangle's n_t and d_t (a few ulps: its triangles are well shaped). The mesh is bounded only
+// when that is at least kEdgeOn of the greatest distance from the eye to its box: no triangle
+// is seen nearer edge on, so on screen its well-shaped triangles are no slivers and their planes
+// are well conditioned (step 4); half of c stands in for c against rounding, as half of kAway
+// does for clusters. Tiled.MeshBoundBoundsEveryTriangle (tests/tiled_test.cpp) checks the box
+// and bound against every triangle's own.
+namespace {
+constexpr double kEdgeOn = 1e-4;
+}  // namespace
+
+MeshView meshView(const Camera& cam, const DepthSetup& depth) {
+  MeshView mv;
+  const ClusterView view = clusterView(cam);
+  mv.enabled = view.enabled && !depth.orthographic;
+  mv.eye = view.eye;
+  mv.eyeLength = glm::length(view.eye);
+  mv.gradient = view.gradient();
+  mv.pixelFromWorld = cam.pixelFromCamera * cam.cameraFromWorld;
+  mv.camera = &cam;
+  mv.depth = depth;
+  return mv;
+}
+
+MeshTest meshBound(const Scene& scene, size_t m, const MeshView& mv, MeshBound& out) {
+  const MeshRange& mesh = scene.meshes[m];
+  if (!mv.enabled || mesh.planeCount == 0 || mesh.bounds.empty()) return MeshTest::None;
+  const Camera& cam = *mv.camera;
+  const dmat4& M = mv.pixelFromWorld;
+  // The box in view, by intervals: each homogeneous coordinate over the box, from the least and
+  // greatest of each term (a bound of every corner's, as transformVertex computes it, up to
+  // rounding: the margins below), then x = hx / w and y = hy / w over those (w > 0).
+  const Bounds3& b = mesh.bounds;
+  double lo[4], hi[4], terms[4];
+  for (int r = 0; r < 4; ++r) {
+    lo[r] = hi[r] = M[3][r];
+    terms[r] = std::abs(M[3][r]);
+    for (int j = 0; j < 3; ++j) {
+      const double u = M[j][r] * b.lo[j], v = M[j][r] * b.hi[j];
+      lo[r] += std::min(u, v), hi[r] += std::max(u, v);
+      terms[r] += std::max(std::abs(u), std::abs(v));
+    }
+    lo[r] -= 1e-12 * terms[r], hi[r] += 1e-12 * terms[r];
+  }
+  const double wLo = lo[3], wHi = hi[3];  // (a pinhole camera: eye depth d is w)
+  const double margin = 1e-9 * (terms[0] + terms[1] + terms[2] + terms[3] * (2 * kGuardBandPixels + cam.width + cam.height + 1) +
+                                cam.near + cam.far);
+  if (!(wLo - cam.near > margin && cam.far - wHi > margin)) return MeshTest::None;
+  // (Reciprocals rather than four divisions: their rounding, ~1e-16 relative, is far within the
+  // room pixelBoxOf leaves.)
+  const double invLo = 1 / wLo, invHi = 1 / wHi;
+  const double x0 = std::min(lo[0] * invLo, lo[0] * invHi), x1 = std::max(hi[0] * invLo, hi[0] * invHi);
+  const double y0 = std::min(lo[1] * invLo, lo[1] * invHi), y1 = std::max(hi[1] * invLo, hi[1] * invHi);
+  // Inside the guard band with room (every corner's planeDistance above the margin).
+  const double room = 2 * margin * invLo;
+  const double gx0 = -kGuardBandPixels, gx1 = cam.width + kGuardBandPixels;
+  const double gy0 = -kGuardBandPixels, gy1 = cam.height + kGuardBandPixels;
+  if (!(x0 - gx0 > room && gx1 - x1 > room && y0 - gy0 > room && gy1 - y1 > room)) return MeshTest::None;
+  BoxInView in{wLo, wHi, x0, y0, x1, y1};
+  if (!pixelBoxOf(in, cam, out.minX, out.minY, out.maxX, out.maxY)) return MeshTest::Outside;
+  out.zMin = wLo;
+  // The least distance from the eye to a triangle's plane (norms bounded by their L1 norms).
+  const dvec3 e = mv.eye;
+  const dvec3 most = glm::max(glm::abs(b.lo), glm::abs(b.hi));
+  const double slack = 1e-9 * (most.x + most.y + most.z + mv.eyeLength);
+  double c = std::numeric_limits<double>::infinity();
+  for (uint32_t i = mesh.firstPlane; i < mesh.firstPlane + mesh.planeCount; ++i) {
+    const MeshPlane& p = scene.meshPlanes[i];
+    c = std::min(c, std::abs(p.d - glm::dot(p.n, e)) - p.dSlack - p.nSlack * mv.eyeLength);
+  }
+  c -= slack;
+  const dvec3 toCentre = glm::abs(b.center() - e), half = 0.5 * (b.hi - b.lo);
+  const double farthest = (toCentre.x + toCentre.y + toCentre.z + half.x + half.y + half.z) * (1 + 1e-12);
+  if (!(c >= kEdgeOn * farthest)) return MeshTest::None;
+  // 2.-4. with half of c: the largest D = (1 + 1e-6) / zMin + 2 (gradient / (c / 2)) / 256, as
+  // an eye depth (one division), mapped and stored.
+  const double nearestDepth = (1 - 1e-12) * (wLo * c) / ((1 + 1e-6) * c + wLo * mv.gradient / 64);
+  out.nearest = storedNearest(nearestDepth, mv.depth);
+  return std::isfinite(out.nearest) && nearestDepth > 0 ? MeshTest::Bounded : MeshTest::None;
 }
 
 size_t FrontEndOutput::triangleCount() const {
@@ -370,7 +475,7 @@ namespace {
 // first, so the output stays in submission order.
 void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& options, const TriangleShader& shade,
                 const FrontEndOutput& fe, const DepthSetup* depth, bool defer, const ClusterView* clusters,
-                size_t begin, size_t end, FrontEndChunk& out) {
+                size_t chunkBegin, size_t chunkEnd, const std::vector<TriangleRange>* only, FrontEndChunk& out) {
   out.triangles.clear();
   out.nearest.clear();
   out.deferred.clear();
@@ -426,70 +531,80 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
   HVertex poly[3 + kPlanes], scratch[3 + kPlanes];
   SetupTriangle st;
   static_assert(kChunkTriangles % kClusterTriangles == 0, "a cluster lies in one chunk");
-  for (size_t ti = begin; ti < end; ++ti) {
-    const Triangle& tri = scene.triangles[ti];
-    if (clusters && ti % kClusterTriangles == 0 && fe.meshInView(tri.face)) {  // (a cluster is in one mesh)
-      const TriangleCluster& cluster = scene.clusters[ti / kClusterTriangles];
-      if (ti + kClusterTriangles < end) {  // the next cluster (a culled or deferred one is skipped: no stream to follow)
-        __builtin_prefetch(&cluster + 1);
-        __builtin_prefetch(&scene.triangles[ti + kClusterTriangles]);
-      }
-      if (options.cull == Cull::Back) {  // each of its triangles a back face: culled, as set-up would
-        if (cullCluster(cluster, *clusters, cam, fe.pixelFromWorld)) {
-          counters.culledBackface += kClusterTriangles;
-          ti += kClusterTriangles - 1;
-          continue;
+  // The chunk's triangles, or those of `only` in it: [begin, end) segment by segment.
+  auto segment = only ? std::lower_bound(only->begin(), only->end(), chunkBegin,
+                                         [](const TriangleRange& r, size_t t) { return r.end <= t; })
+                      : std::vector<TriangleRange>::const_iterator{};
+  for (size_t begin = chunkBegin, end = chunkEnd;; ++segment) {
+    if (only) {
+      if (segment == only->end() || segment->first >= chunkEnd) break;
+      begin = std::max<size_t>(chunkBegin, segment->first), end = std::min<size_t>(chunkEnd, segment->end);
+    }
+    for (size_t ti = begin; ti < end; ++ti) {
+      const Triangle& tri = scene.triangles[ti];
+      if (clusters && ti % kClusterTriangles == 0 && fe.meshInView(tri.face)) {  // (a cluster is in one mesh)
+        const TriangleCluster& cluster = scene.clusters[ti / kClusterTriangles];
+        if (ti + kClusterTriangles < end) {  // the next cluster (a culled or deferred one is skipped: no stream to follow)
+          __builtin_prefetch(&cluster + 1);
+          __builtin_prefetch(&scene.triangles[ti + kClusterTriangles]);
         }
-      } else if (defer) {
-        DeferredCluster dc;
-        if (deferCluster(cluster, *clusters, cam, fe.pixelFromWorld, *depth, dc)) {
-          dc.cluster = uint32_t(ti / kClusterTriangles);
-          out.clusters.push_back(dc);
-          ti += kClusterTriangles - 1;
-          continue;
+        if (options.cull == Cull::Back) {  // each of its triangles a back face: culled, as set-up would
+          if (cullCluster(cluster, *clusters, cam, fe.pixelFromWorld)) {
+            counters.culledBackface += kClusterTriangles;
+            ti += kClusterTriangles - 1;
+            continue;
+          }
+        } else if (defer) {
+          DeferredCluster dc;
+          if (deferCluster(cluster, *clusters, cam, fe.pixelFromWorld, *depth, dc)) {
+            dc.cluster = uint32_t(ti / kClusterTriangles);
+            out.clusters.push_back(dc);
+            ti += kClusterTriangles - 1;
+            continue;
+          }
+        }
+      }
+      if (!fe.meshInView(tri.face)) {
+        ++counters.culledFrustum;
+        continue;
+      }
+      const uint32_t c0 = fe.outcodes[tri.v[0]], c1 = fe.outcodes[tri.v[1]], c2 = fe.outcodes[tri.v[2]];
+      if (c0 & c1 & c2) {
+        ++counters.culledFrustum;
+        continue;
+      }
+      if ((c0 | c1 | c2) == 0) {
+        for (int k = 0; k < 3; ++k) {
+          batchVertex[k][batched] = tri.v[k];
+          __builtin_prefetch(fe.projected.data() + tri.v[k]);  // (setupBatch reads it a batch later)
+        }
+        batchTriangle[batched] = uint32_t(ti);
+        batchFace[batched] = tri.face;
+        if (++batched == kBatch) flush();
+        continue;
+      }
+      if (batched) flush();
+      ++counters.clipped;
+      for (int k = 0; k < 3; ++k) poly[k] = transformVertex(scene.positions[tri.v[k]], fe.pixelFromWorld);
+      const int n = clipPolygon(poly, 3, c0 | c1 | c2, cam, scratch);
+      // The clipped polygon is convex: fan it. Every piece keeps the triangle's and face's index.
+      for (int i = 1; i + 1 < n; ++i) {
+        HVertex piece[3] = {poly[0], poly[i], poly[i + 1]};
+        if (setupTriangle(piece, uint32_t(ti), tri.face, cam, options.cull, counters, st)) {
+          st.color = color && st.frontFacing ? shade(st.triangle) : Rgba8{};
+          keep(st, depth ? nearestStored(st, *depth) : 0.0);
         }
       }
     }
-    if (!fe.meshInView(tri.face)) {
-      ++counters.culledFrustum;
-      continue;
-    }
-    const uint32_t c0 = fe.outcodes[tri.v[0]], c1 = fe.outcodes[tri.v[1]], c2 = fe.outcodes[tri.v[2]];
-    if (c0 & c1 & c2) {
-      ++counters.culledFrustum;
-      continue;
-    }
-    if ((c0 | c1 | c2) == 0) {
-      for (int k = 0; k < 3; ++k) {
-        batchVertex[k][batched] = tri.v[k];
-        __builtin_prefetch(fe.projected.data() + tri.v[k]);  // (setupBatch reads it a batch later)
-      }
-      batchTriangle[batched] = uint32_t(ti);
-      batchFace[batched] = tri.face;
-      if (++batched == kBatch) flush();
-      continue;
-    }
-    if (batched) flush();
-    ++counters.clipped;
-    for (int k = 0; k < 3; ++k) poly[k] = transformVertex(scene.positions[tri.v[k]], fe.pixelFromWorld);
-    const int n = clipPolygon(poly, 3, c0 | c1 | c2, cam, scratch);
-    // The clipped polygon is convex: fan it. Every piece keeps the triangle's and face's index.
-    for (int i = 1; i + 1 < n; ++i) {
-      HVertex piece[3] = {poly[0], poly[i], poly[i + 1]};
-      if (setupTriangle(piece, uint32_t(ti), tri.face, cam, options.cull, counters, st)) {
-        st.color = color && st.frontFacing ? shade(st.triangle) : Rgba8{};
-        keep(st, depth ? nearestStored(st, *depth) : 0.0);
-      }
-    }
+    if (!only) break;
   }
   if (batched) flush();
 }
 
 }  // namespace
 
-void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& options, FrontEndOutput& out,
-                 const ChunkConsumer& consumer, const DepthSetup* nearestFor, bool deferBackFaces, bool deferClusters) {
-  static_cast<FrontEndCounters&>(out) = FrontEndCounters{};
+void runVertexPass(const Scene& scene, const Camera& cam, const RenderOptions& options, FrontEndOutput& out,
+                   const MeshConsumer& meshConsumer) {
   const int threads = resolveThreads(options.threads);
 
   // Every vertex once, in double, straight from world to homogeneous pixel coordinates; those
@@ -535,6 +650,7 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
     if (c >= vertexChunks) {
       const size_t first = (c - vertexChunks) * kMeshesPerItem, last = std::min(meshCount, first + kMeshesPerItem);
       testMeshes(first, last);
+      if (meshConsumer) meshConsumer(first, last);
       return;
     }
     const size_t first = c * kChunkTriangles, count = std::min(nv, first + kChunkTriangles) - first;
@@ -549,6 +665,13 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
     std::fill(out.faceVisible.begin() + mesh.firstFace, out.faceVisible.begin() + mesh.firstFace + mesh.faceCount, 0);
   }
 
+}
+
+void runSetUp(const Scene& scene, const Camera& cam, const RenderOptions& options, const FrontEndOutput& vertices,
+              FrontEndOutput& out, const ChunkConsumer& consumer, const DepthSetup* nearestFor, bool deferBackFaces,
+              bool deferClusters, const std::vector<TriangleRange>* only) {
+  static_cast<FrontEndCounters&>(out) = FrontEndCounters{};
+  const int threads = resolveThreads(options.threads);
   // Triangles in fixed chunks, each into its own list (read in chunk order, they are the
   // submission order), each handed to the consumer by the worker that set it up.
   const size_t nt = scene.triangles.size();
@@ -564,11 +687,17 @@ void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& opt
     FrontEndChunk& chunk = out.chunks[c];
     chunk.counters = FrontEndCounters{};
     chunk.firstTriangle = uint32_t(c * per);
-    setupRange(scene, cam, options, shade, out, nearestFor, deferBackFaces && nearestFor,
-               view.enabled ? &view : nullptr, c * per, std::min(nt, (c + 1) * per), chunk);
+    setupRange(scene, cam, options, shade, vertices, nearestFor, deferBackFaces && nearestFor,
+               view.enabled ? &view : nullptr, c * per, std::min(nt, (c + 1) * per), only, chunk);
     if (consumer) consumer(c);
   });
   for (size_t c = 0; c < out.chunkCount; ++c) out.add(out.chunks[c].counters);
+}
+
+void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& options, FrontEndOutput& out,
+                 const ChunkConsumer& consumer, const DepthSetup* nearestFor, bool deferBackFaces, bool deferClusters) {
+  runVertexPass(scene, cam, options, out);
+  runSetUp(scene, cam, options, out, out, consumer, nearestFor, deferBackFaces, deferClusters);
 }
 
 }  // namespace hsr

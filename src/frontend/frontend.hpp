@@ -297,6 +297,26 @@ void runFrontEnd(const Scene& scene, const Camera& camera, const RenderOptions& 
                  const ChunkConsumer& consumer = {}, const DepthSetup* nearestFor = nullptr,
                  bool deferBackFaces = false, bool deferClusters = true);
 
+/// Scene triangles [first, end).
+struct TriangleRange {
+  uint32_t first, end;
+};
+
+/// runFrontEnd in two steps: the vertex pass (every vertex transformed, projected where inside
+/// the clip volume; meshes outside it culled whole), into `out`; then set-up (and the consumer)
+/// reading `vertices`, the output of a vertex pass with the same scene, camera and options,
+/// into `out`'s chunks and counters (`out` may be `vertices`). With `only` (sorted, disjoint
+/// ranges, each a union of whole meshes, so no cluster is split), only those triangles are set
+/// up: the chunks stay the same, the others are left out as if culled, uncounted.
+/// `meshConsumer`, when given, is called with runs [first, last) of meshes whose view test
+/// (FrontEndOutput::meshCulled) is done, on the worker that did it, while the vertex pass goes on.
+using MeshConsumer = std::function<void(size_t first, size_t last)>;
+void runVertexPass(const Scene& scene, const Camera& camera, const RenderOptions& options, FrontEndOutput& out,
+                   const MeshConsumer& meshConsumer = {});
+void runSetUp(const Scene& scene, const Camera& camera, const RenderOptions& options, const FrontEndOutput& vertices,
+              FrontEndOutput& out, const ChunkConsumer& consumer = {}, const DepthSetup* nearestFor = nullptr,
+              bool deferBackFaces = false, bool deferClusters = true, const std::vector<TriangleRange>* only = nullptr);
+
 /// What deciding about clusters needs from a camera, once per frame (deferCluster).
 struct ClusterView {
   bool enabled = false;  // a perspective camera of the kind resolveCamera makes (no cluster is deferred otherwise)
@@ -321,5 +341,31 @@ bool cullCluster(const TriangleCluster& cluster, const ClusterView& view, const 
 /// cam.cameraFromWorld.
 bool deferCluster(const TriangleCluster& cluster, const ClusterView& view, const Camera& cam,
                   const dmat4& pixelFromWorld, const DepthSetup& depth, DeferredCluster& out);
+
+/// Testing a mesh whole for occlusion (the occlusion buffer's mesh culling): a pixel box in the
+/// image holding every pixel centre its triangles may cover, a stored value of the depth setup
+/// that none of their fragments is nearer than, and the least eye depth of its box (conservative).
+struct MeshBound {
+  int16_t minX, minY, maxX, maxY;
+  double nearest, zMin;
+};
+/// What meshBound needs from a camera and depth setup, once per frame.
+struct MeshView {
+  bool enabled = false;  // a perspective camera of the kind resolveCamera makes (ClusterView)
+  dvec3 eye{0.0};
+  double eyeLength = 0, gradient = 0;  // |eye|; ClusterView::gradient()
+  dmat4 pixelFromWorld{1.0};
+  const Camera* camera = nullptr;
+  DepthSetup depth;
+};
+MeshView meshView(const Camera& cam, const DepthSetup& depth);
+/// What meshBound found: no bound (None); none of the mesh's triangles covers a pixel centre of
+/// the image (Outside: it draws nothing); or a MeshBound.
+enum class MeshTest : uint8_t { None, Outside, Bounded };
+/// Mesh `mesh` of `scene` bounded so (MeshBound, in `out`), when the camera is a perspective one
+/// (view.enabled), the mesh has its planes (MeshRange::planeCount), its box lies inside the clip
+/// volume (none of its triangles is clipped) and it is not seen too nearly edge on (see
+/// frontend.cpp).
+MeshTest meshBound(const Scene& scene, size_t mesh, const MeshView& view, MeshBound& out);
 
 }  // namespace hsr

@@ -398,8 +398,9 @@ void RasterizeTileT(const TileJob& job) {
   const int x0 = tf.x0, y0 = tf.y0, w = tf.w, h = tf.h;
 
   // The tile starts cleared, as one uniform state: nothing is written to its buffers until a
-  // triangle covers only part of it. (The late pass goes on from the front pass's tile.)
-  if (job.pass != TileJob::Pass::Late) {
+  // triangle covers only part of it. (The late pass goes on from the front pass's tile; with
+  // keep, the pass goes on from the tile loaded.)
+  if (job.pass != TileJob::Pass::Late && !job.keep) {
     s.state = TileState::Clear;
     s.resolved = false;
     s.tileFar = tf.clear;

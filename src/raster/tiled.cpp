@@ -589,9 +589,9 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
 }  // namespace
 
 void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids, TileScratch& scratch,
-                   TileOrder& order, RasterCounters& counters) {
+                   TileOrder& order, RasterCounters& counters, bool keep) {
   const bool late = bins.entries(tile, true) > 0;
-  TileJob job{&bins, tile, depth, ids, &scratch, &counters, nullptr, &order, late ? TileJob::Pass::Front : TileJob::Pass::Whole};
+  TileJob job{&bins, tile, depth, ids, &scratch, &counters, nullptr, &order, late ? TileJob::Pass::Front : TileJob::Pass::Whole, keep};
   HWY_DYNAMIC_DISPATCH(RasterizeTile)(job);
   if (!late) return;
   selectLate(bins, tile, depth, ids, scratch, order, counters);

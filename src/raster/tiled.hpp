@@ -344,13 +344,15 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, const DepthS
 void prepareBins(Bins& bins, int width, int height, size_t chunkCount);
 void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const DepthSetup* cullFor = nullptr);
 
-/// Rasterizes every triangle binned to `tile` into `scratch` (cleared first), visiting them in
+/// Rasterizes every triangle binned to `tile` into `scratch` (cleared first; with `keep`, onto
+/// what it holds: a tile loadTile() brought back, whose uniform states' triangles are still
+/// alive), visiting them in
 /// orderTile's order (lists in `order`), then the tile's deferred back faces and clusters' triangles
 /// that may show (see binChunk). With ids false, only depth is kept (no triangle ids). Adds to
 /// `counters` (a deferred face found hidden counts as a triangle-tile pair culled, a deferred
 /// cluster found hidden as kClusterTriangles of them).
 void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids, TileScratch& scratch,
-                   TileOrder& order, RasterCounters& counters);
+                   TileOrder& order, RasterCounters& counters, bool keep = false);
 
 /// Readies a tile that rasterizeTile(ids = true) left in `scratch` for resolveTile() with ids
 /// (any FrameOutputs but DepthOnly), right after rasterizing, while the tile's set-up
@@ -421,6 +423,7 @@ struct TileJob {
   // blocks' farthest values exact for the deferred faces' test; Late — order->late, into the
   // tile as the Front pass left it.
   enum class Pass : uint8_t { Whole, Front, Late } pass = Pass::Whole;
+  bool keep = false;  // Whole or Front: onto the tile as it is, not cleared first (rasterizeTile's keep)
 };
 
 /// Name of the instruction set the kernel dispatches to on this machine (e.g. "AVX3").

@@ -71,6 +71,55 @@ void buildClusters(Scene& scene) {
   }
 }
 
+// MeshRange::firstTriangle, triangleCount, and the planes of each mesh (MeshPlane): triangles
+// grouped by plane, a triangle joining the first group whose normal is within 1e-9 and offset
+// within 1e-9 (relative) of its own (the two triangles of a box's face: equal up to rounding).
+void buildMeshPlanes(Scene& scene) {
+  constexpr double kMinShape = 0.02;  // well shaped, as for clusters (buildClusters)
+  constexpr double kSame = 1e-9;
+  scene.meshPlanes.clear();
+  size_t t = 0;
+  for (MeshRange& mesh : scene.meshes) {
+    const uint32_t endFace = mesh.firstFace + mesh.faceCount;
+    while (t < scene.triangles.size() && scene.triangles[t].face < mesh.firstFace) ++t;
+    mesh.firstTriangle = uint32_t(t);
+    while (t < scene.triangles.size() && scene.triangles[t].face < endFace) ++t;
+    mesh.triangleCount = uint32_t(t - mesh.firstTriangle);
+    mesh.firstPlane = uint32_t(scene.meshPlanes.size());
+    mesh.planeCount = 0;
+    bool usable = mesh.triangleCount > 0;
+    for (size_t i = mesh.firstTriangle; usable && i < t; ++i) {
+      const uint32_t* v = scene.triangles[i].v;
+      const dvec3 &a = scene.positions[v[0]], &b = scene.positions[v[1]], &p = scene.positions[v[2]];
+      const dvec3 cross = glm::cross(b - a, p - a);
+      const double len = glm::length(cross);
+      const double edge = std::max({glm::dot(b - a, b - a), glm::dot(p - b, p - b), glm::dot(a - p, a - p)});
+      if (!(len >= kMinShape * edge) || !(len > 0) || !std::isfinite(len)) {
+        usable = false;
+        break;
+      }
+      const dvec3 n = cross / len;
+      const double d = glm::dot(n, a);
+      MeshPlane* group = nullptr;
+      for (size_t g = mesh.firstPlane; g < scene.meshPlanes.size() && !group; ++g) {
+        MeshPlane& mp = scene.meshPlanes[g];
+        if (glm::length(n - mp.n) <= kSame && std::abs(d - mp.d) <= kSame * std::max(1.0, std::abs(mp.d))) group = &mp;
+      }
+      if (!group) {
+        if (scene.meshPlanes.size() - mesh.firstPlane == kMaxMeshPlanes) {
+          usable = false;
+          break;
+        }
+        group = &scene.meshPlanes.emplace_back(MeshPlane{n, d, 0, 0});
+      }
+      group->nSlack = std::max(group->nSlack, glm::length(n - group->n));
+      group->dSlack = std::max(group->dSlack, std::abs(d - group->d));
+    }
+    if (usable) mesh.planeCount = uint32_t(scene.meshPlanes.size() - mesh.firstPlane);
+    else scene.meshPlanes.resize(mesh.firstPlane);
+  }
+}
+
 }  // namespace
 
 void Scene::addFace(std::span<const uint32_t> indices, Rgba8 color) {
@@ -85,7 +134,7 @@ void Scene::addFace(std::span<const uint32_t> indices, Rgba8 color) {
 void Scene::beginMesh(std::string name) {
   uint32_t first = uint32_t(faceCount());
   if (!meshes.empty()) meshes.back().faceCount = first - meshes.back().firstFace;
-  meshes.push_back({std::move(name), first, 0, {}});
+  meshes.push_back({std::move(name), first, 0, {}, 0, 0, 0, 0});
 }
 
 void Scene::finalize() {
@@ -145,7 +194,7 @@ void Scene::finalize() {
   // when none was begun), counts recomputed from the starts, empty ranges dropped.
   const uint32_t total = uint32_t(faceCount());
   if (meshes.empty() || meshes.front().firstFace != 0)
-    meshes.insert(meshes.begin(), MeshRange{std::filesystem::path(source).stem().string(), 0, 0, {}});
+    meshes.insert(meshes.begin(), MeshRange{std::filesystem::path(source).stem().string(), 0, 0, {}, 0, 0, 0, 0});
   for (size_t m = 0; m < meshes.size(); ++m) {
     uint32_t end = m + 1 < meshes.size() ? meshes[m + 1].firstFace : total;
     if (end < meshes[m].firstFace || end > total)
@@ -159,6 +208,7 @@ void Scene::finalize() {
       for (uint32_t v : face(f)) mesh.bounds.add(positions[v]);
   }
   buildClusters(*this);
+  buildMeshPlanes(*this);
 }
 
 
