@@ -381,6 +381,12 @@ MeshView meshView(const Camera& cam, const DepthSetup& depth) {
   mv.eyeLength = glm::length(view.eye);
   mv.gradient = view.gradient();
   mv.pixelFromWorld = cam.pixelFromCamera * cam.cameraFromWorld;
+  const dmat4& M = mv.pixelFromWorld;
+  for (int j = 0; j < 4; ++j) {
+    mv.positive[j] = glm::max(M[j], dvec4(0.0));
+    mv.negative[j] = glm::min(M[j], dvec4(0.0));
+    mv.magnitude[j] = glm::abs(M[j]);
+  }
   mv.camera = &cam;
   mv.depth = depth;
   return mv;
@@ -390,22 +396,20 @@ MeshTest meshBound(const Scene& scene, size_t m, const MeshView& mv, MeshBound& 
   const MeshRange& mesh = scene.meshes[m];
   if (!mv.enabled || mesh.planeCount == 0 || mesh.bounds.empty()) return MeshTest::None;
   const Camera& cam = *mv.camera;
-  const dmat4& M = mv.pixelFromWorld;
-  // The box in view, by intervals: each homogeneous coordinate over the box, from the least and
-  // greatest of each term (a bound of every corner's, as transformVertex computes it, up to
-  // rounding: the margins below), then x = hx / w and y = hy / w over those (w > 0).
+  // The box in view, by intervals: each homogeneous coordinate (the four rows at once) over the
+  // box, the least from each positive coefficient times the box's low end and each negative one
+  // times its high end, the greatest the other way round (a bound of every corner's value as
+  // transformVertex computes it, and so of every vertex's, up to rounding: 1e-12 of the terms'
+  // magnitudes); then x = hx / w and y = hy / w over those (w > 0).
   const Bounds3& b = mesh.bounds;
-  double lo[4], hi[4], terms[4];
-  for (int r = 0; r < 4; ++r) {
-    lo[r] = hi[r] = M[3][r];
-    terms[r] = std::abs(M[3][r]);
-    for (int j = 0; j < 3; ++j) {
-      const double u = M[j][r] * b.lo[j], v = M[j][r] * b.hi[j];
-      lo[r] += std::min(u, v), hi[r] += std::max(u, v);
-      terms[r] += std::max(std::abs(u), std::abs(v));
-    }
-    lo[r] -= 1e-12 * terms[r], hi[r] += 1e-12 * terms[r];
-  }
+  const dvec3 most = glm::max(glm::abs(b.lo), glm::abs(b.hi));
+  const dvec4 terms = mv.magnitude[3] + mv.magnitude[0] * most.x + mv.magnitude[1] * most.y + mv.magnitude[2] * most.z;
+  const dvec4 lo = mv.pixelFromWorld[3] + (mv.positive[0] * b.lo.x + mv.negative[0] * b.hi.x) +
+                   (mv.positive[1] * b.lo.y + mv.negative[1] * b.hi.y) +
+                   (mv.positive[2] * b.lo.z + mv.negative[2] * b.hi.z) - 1e-12 * terms;
+  const dvec4 hi = mv.pixelFromWorld[3] + (mv.positive[0] * b.hi.x + mv.negative[0] * b.lo.x) +
+                   (mv.positive[1] * b.hi.y + mv.negative[1] * b.lo.y) +
+                   (mv.positive[2] * b.hi.z + mv.negative[2] * b.lo.z) + 1e-12 * terms;
   const double wLo = lo[3], wHi = hi[3];  // (a pinhole camera: eye depth d is w)
   const double margin = 1e-9 * (terms[0] + terms[1] + terms[2] + terms[3] * (2 * kGuardBandPixels + cam.width + cam.height + 1) +
                                 cam.near + cam.far);
@@ -425,7 +429,6 @@ MeshTest meshBound(const Scene& scene, size_t m, const MeshView& mv, MeshBound& 
   out.zMin = wLo;
   // The least distance from the eye to a triangle's plane (norms bounded by their L1 norms).
   const dvec3 e = mv.eye;
-  const dvec3 most = glm::max(glm::abs(b.lo), glm::abs(b.hi));
   const double slack = 1e-9 * (most.x + most.y + most.z + mv.eyeLength);
   double c = std::numeric_limits<double>::infinity();
   for (uint32_t i = mesh.firstPlane; i < mesh.firstPlane + mesh.planeCount; ++i) {

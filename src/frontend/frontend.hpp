@@ -355,6 +355,8 @@ struct MeshView {
   dvec3 eye{0.0};
   double eyeLength = 0, gradient = 0;  // |eye|; ClusterView::gradient()
   dmat4 pixelFromWorld{1.0};
+  // Its columns' positive and negative parts and magnitudes (the intervals of meshBound).
+  dvec4 positive[4], negative[4], magnitude[4];
   const Camera* camera = nullptr;
   DepthSetup depth;
 };
