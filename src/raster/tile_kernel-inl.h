@@ -1206,8 +1206,9 @@ void RasterizeTile(const TileJob& job) {
 
 // storeTile (tiled.hpp): the summary, then the values of the blocks held pixel by pixel, each in
 // the format's 32 bits (keptStored inverts it), streamed: a block's 64 values are 4 whole lines.
-template <DepthStorage S>
+template <DepthStorage S, DepthMapping M>
 void StoreTileT(const TileScratch& from, KeptTile& to) {
+  constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
   const D d;
   const size_t N = hn::Lanes(d);
   const hn::Rebind<int32_t, D> di32;
@@ -1216,6 +1217,14 @@ void StoreTileT(const TileScratch& from, KeptTile& to) {
   to.tileFar = from.tileFar;
   to.tileNear = from.tileNear;
   to.tileFarStale = from.tileFarStale;
+  if (from.state == TileState::Pixels && from.tileFarStale) {
+    // The farthest of the blocks' farthest values, once here rather than at every query of the
+    // kept tile (anyFarther; the occlusion buffer's mesh culling asks thousands).
+    V far = hn::Load(d, from.blockFar);
+    for (size_t b = N; b < size_t(kBlocksPerTile); b += N) far = Farther<kGreater>(far, hn::Load(d, from.blockFar + b));
+    to.tileFar = FarthestLane<kGreater>(far);
+    to.tileFarStale = false;
+  }
   to.resolved = from.resolved;
   to.state = from.state;
   to.plane = from.plane;
@@ -1252,7 +1261,7 @@ void StoreTileT(const TileScratch& from, KeptTile& to) {
 }
 
 void StoreTile(const TileScratch& from, const DepthSetup& depth, KeptTile& to) {
-  visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() { StoreTileT<S>(from, to); });
+  visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() { StoreTileT<S, M>(from, to); });
 }
 
 const char* KernelTarget() { return hwy::TargetName(HWY_TARGET); }
