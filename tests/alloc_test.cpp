@@ -76,5 +76,28 @@ TEST(Memory, WarmTiledFramesAllocateNoBuffers) {
   }
 }
 
+// The occlusion buffer, with mesh culling's two passes on the city: a warm render allocates no
+// buffer either (each pass's set-up records and bins are kept from frame to frame).
+TEST(Memory, WarmOcclusionRendersAllocateNoBuffers) {
+  for (const char* name : {"builtin:city", "builtin:layers?n=64", "builtin:cubes"}) {
+    const Scene scene = loadScene(name);
+    const Camera cam = resolveCamera(scene.camera ? *scene.camera : frameBounds(scene.bounds()), 640, 360,
+                                     scene.bounds());
+    for (Cull cull : {Cull::None, Cull::Back}) {
+      OcclusionBuffer buffer;
+      buffer.render(scene, cam, {DepthFormat{}, cull, 2});  // warm-up
+      buffer.render(scene, cam, {DepthFormat{}, cull, 2});
+      allocations = 0;
+      largest = 0;
+      counting = true;
+      const Stats& st = buffer.render(scene, cam, {DepthFormat{}, cull, 2});
+      counting = false;
+      EXPECT_LE(allocations.load(), 8u) << name;
+      EXPECT_LE(largest.load(), 1024u) << name << ": a buffer was allocated during a warm render";
+      if (std::string(name) == "builtin:city") EXPECT_GT(st.meshes_culled_occlusion.value_or(0), 500u);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace hsr
