@@ -213,6 +213,11 @@ void sortPairs(ChunkBins& cb, size_t tiles, ItemOf&& itemOf, NearestOf&& nearest
   // incremented pair by pair in memory made each increment wait for the one before.
   const uint64_t* pairs = cb.pairs.data();
   const size_t n = cb.pairs.size();
+  if (n == 0) {  // (most chunks' deferred lists; two passes over the tiles' starts saved)
+    cb.items.clear();
+    cb.itemNearest.clear();
+    return;
+  }
   auto runEnd = [&](size_t i) {
     const uint64_t tile = pairs[i] >> 32;
     size_t j = i + 1;
