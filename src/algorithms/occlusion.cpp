@@ -179,8 +179,9 @@ void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions
   tests.resize(meshCount);
   bounds.resize(meshCount);
   runVertexPass(scene, camera, opt, first.fe, [&](size_t firstMesh, size_t lastMesh) {
+    meshBounds(scene, firstMesh, lastMesh, view, tests.data() + firstMesh, bounds.data() + firstMesh);
     for (size_t m = firstMesh; m < lastMesh; ++m)
-      tests[m] = first.fe.meshCulled[m] ? MeshTest::Outside : meshBound(scene, m, view, bounds[m]);
+      if (first.fe.meshCulled[m]) tests[m] = MeshTest::Outside;
   });
   const FrontEndOutput& vertices = first.fe;
   // The meshes that draw nothing are left out (their triangles counted as set-up would: outside

@@ -311,8 +311,8 @@ bool pixelBoxOf(const BoxInView& in, const Camera& cam, int16_t& minX, int16_t& 
   return true;
 }
 
-// Eye depth d (perspective) as a stored value of `depth`, mapped, then moved 1e-9 of itself
-// nearer, clamped and rounded to storage (all monotone): step 4's room for rounding.
+}  // namespace
+
 double storedNearest(double d, const DepthSetup& depth) {
   double out = 0;
   visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping Map>() {
@@ -322,8 +322,6 @@ double storedNearest(double d, const DepthSetup& depth) {
   });
   return out;
 }
-
-}  // namespace
 
 bool deferCluster(const TriangleCluster& cl, const ClusterView& view, const Camera& cam, const dmat4& M,
                   const DepthSetup& depth, DeferredCluster& out) {
@@ -359,20 +357,6 @@ bool cullCluster(const TriangleCluster& cl, const ClusterView& view, const Camer
   return 2 * area > 4 * delta * edge + 8 * delta * delta;
 }
 
-// Why meshBound's box and bound hold for every fragment of the mesh's triangles: as for a
-// deferred cluster (steps 2.-4. above), with step 1's distance c from the eye to each triangle's
-// plane taken from the mesh's planes instead of a normal cone: at least |d - n . e| - dSlack -
-// nSlack |e| (MeshPlane), less 1e-9 of the magnitudes involved for the rounding of each
-// triangle's n_t and d_t (a few ulps: its triangles are well shaped). The mesh is bounded only
-// when that is at least kEdgeOn of the greatest distance from the eye to its box: no triangle
-// is seen nearer edge on, so on screen its well-shaped triangles are no slivers and their planes
-// are well conditioned (step 4); half of c stands in for c against rounding, as half of kAway
-// does for clusters. Tiled.MeshBoundBoundsEveryTriangle (tests/tiled_test.cpp) checks the box
-// and bound against every triangle's own.
-namespace {
-constexpr double kEdgeOn = 1e-4;
-}  // namespace
-
 MeshView meshView(const Camera& cam, const DepthSetup& depth) {
   MeshView mv;
   const ClusterView view = clusterView(cam);
@@ -390,60 +374,6 @@ MeshView meshView(const Camera& cam, const DepthSetup& depth) {
   mv.camera = &cam;
   mv.depth = depth;
   return mv;
-}
-
-MeshTest meshBound(const Scene& scene, size_t m, const MeshView& mv, MeshBound& out) {
-  const MeshRange& mesh = scene.meshes[m];
-  if (!mv.enabled || mesh.planeCount == 0 || mesh.bounds.empty()) return MeshTest::None;
-  const Camera& cam = *mv.camera;
-  // The box in view, by intervals: each homogeneous coordinate (the four rows at once) over the
-  // box, the least from each positive coefficient times the box's low end and each negative one
-  // times its high end, the greatest the other way round (a bound of every corner's value as
-  // transformVertex computes it, and so of every vertex's, up to rounding: 1e-12 of the terms'
-  // magnitudes); then x = hx / w and y = hy / w over those (w > 0).
-  const Bounds3& b = mesh.bounds;
-  const dvec3 most = glm::max(glm::abs(b.lo), glm::abs(b.hi));
-  const dvec4 terms = mv.magnitude[3] + mv.magnitude[0] * most.x + mv.magnitude[1] * most.y + mv.magnitude[2] * most.z;
-  const dvec4 lo = mv.pixelFromWorld[3] + (mv.positive[0] * b.lo.x + mv.negative[0] * b.hi.x) +
-                   (mv.positive[1] * b.lo.y + mv.negative[1] * b.hi.y) +
-                   (mv.positive[2] * b.lo.z + mv.negative[2] * b.hi.z) - 1e-12 * terms;
-  const dvec4 hi = mv.pixelFromWorld[3] + (mv.positive[0] * b.hi.x + mv.negative[0] * b.lo.x) +
-                   (mv.positive[1] * b.hi.y + mv.negative[1] * b.lo.y) +
-                   (mv.positive[2] * b.hi.z + mv.negative[2] * b.lo.z) + 1e-12 * terms;
-  const double wLo = lo[3], wHi = hi[3];  // (a pinhole camera: eye depth d is w)
-  const double margin = 1e-9 * (terms[0] + terms[1] + terms[2] + terms[3] * (2 * kGuardBandPixels + cam.width + cam.height + 1) +
-                                cam.near + cam.far);
-  if (!(wLo - cam.near > margin && cam.far - wHi > margin)) return MeshTest::None;
-  // (Reciprocals rather than four divisions: their rounding, ~1e-16 relative, is far within the
-  // room pixelBoxOf leaves.)
-  const double invLo = 1 / wLo, invHi = 1 / wHi;
-  const double x0 = std::min(lo[0] * invLo, lo[0] * invHi), x1 = std::max(hi[0] * invLo, hi[0] * invHi);
-  const double y0 = std::min(lo[1] * invLo, lo[1] * invHi), y1 = std::max(hi[1] * invLo, hi[1] * invHi);
-  // Inside the guard band with room (every corner's planeDistance above the margin).
-  const double room = 2 * margin * invLo;
-  const double gx0 = -kGuardBandPixels, gx1 = cam.width + kGuardBandPixels;
-  const double gy0 = -kGuardBandPixels, gy1 = cam.height + kGuardBandPixels;
-  if (!(x0 - gx0 > room && gx1 - x1 > room && y0 - gy0 > room && gy1 - y1 > room)) return MeshTest::None;
-  BoxInView in{wLo, wHi, x0, y0, x1, y1};
-  if (!pixelBoxOf(in, cam, out.minX, out.minY, out.maxX, out.maxY)) return MeshTest::Outside;
-  out.zMin = wLo;
-  // The least distance from the eye to a triangle's plane (norms bounded by their L1 norms).
-  const dvec3 e = mv.eye;
-  const double slack = 1e-9 * (most.x + most.y + most.z + mv.eyeLength);
-  double c = std::numeric_limits<double>::infinity();
-  for (uint32_t i = mesh.firstPlane; i < mesh.firstPlane + mesh.planeCount; ++i) {
-    const MeshPlane& p = scene.meshPlanes[i];
-    c = std::min(c, std::abs(p.d - glm::dot(p.n, e)) - p.dSlack - p.nSlack * mv.eyeLength);
-  }
-  c -= slack;
-  const dvec3 toCentre = glm::abs(b.center() - e), half = 0.5 * (b.hi - b.lo);
-  const double farthest = (toCentre.x + toCentre.y + toCentre.z + half.x + half.y + half.z) * (1 + 1e-12);
-  if (!(c >= kEdgeOn * farthest)) return MeshTest::None;
-  // 2.-4. with half of c: the largest D = (1 + 1e-6) / zMin + 2 (gradient / (c / 2)) / 256, as
-  // an eye depth (one division), mapped and stored.
-  const double nearestDepth = (1 - 1e-12) * (wLo * c) / ((1 + 1e-6) * c + wLo * mv.gradient / 64);
-  out.nearest = storedNearest(nearestDepth, mv.depth);
-  return std::isfinite(out.nearest) && nearestDepth > 0 ? MeshTest::Bounded : MeshTest::None;
 }
 
 size_t FrontEndOutput::triangleCount() const {

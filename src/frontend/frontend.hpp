@@ -367,7 +367,15 @@ enum class MeshTest : uint8_t { None, Outside, Bounded };
 /// Mesh `mesh` of `scene` bounded so (MeshBound, in `out`), when the camera is a perspective one
 /// (view.enabled), the mesh has its planes (MeshRange::planeCount), its box lies inside the clip
 /// volume (none of its triangles is clipped) and it is not seen too nearly edge on (see
-/// frontend.cpp).
+/// frontend/mesh_bounds.cpp). meshBounds: the same for meshes [first, last) into tests[0,
+/// last - first) and bounds[0, last - first), several at once with SIMD (a mesh's result does
+/// not depend on the others).
 MeshTest meshBound(const Scene& scene, size_t mesh, const MeshView& view, MeshBound& out);
+void meshBounds(const Scene& scene, size_t first, size_t last, const MeshView& view, MeshTest* tests,
+                MeshBound* bounds);
+/// Eye depth d (perspective) as a stored value of `depth` that no fragment whose eye depth is
+/// at least d stores nearer: mapped, moved 1e-9 of itself nearer, clamped and rounded to storage
+/// (all monotone; the room is for the rounding of the planes, deferCluster's step 4).
+double storedNearest(double d, const DepthSetup& depth);
 
 }  // namespace hsr
