@@ -464,15 +464,8 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
   HVertex poly[3 + kPlanes], scratch[3 + kPlanes];
   SetupTriangle st;
   static_assert(kChunkTriangles % kClusterTriangles == 0, "a cluster lies in one chunk");
-  // The chunk's triangles, or those of `only` in it: [begin, end) segment by segment.
-  auto segment = only ? std::lower_bound(only->begin(), only->end(), chunkBegin,
-                                         [](const TriangleRange& r, size_t t) { return r.end <= t; })
-                      : std::vector<TriangleRange>::const_iterator{};
-  for (size_t begin = chunkBegin, end = chunkEnd;; ++segment) {
-    if (only) {
-      if (segment == only->end() || segment->first >= chunkEnd) break;
-      begin = std::max<size_t>(chunkBegin, segment->first), end = std::min<size_t>(chunkEnd, segment->end);
-    }
+  // The triangles [begin, end), in order.
+  auto segment = [&](const size_t begin, const size_t end) {
     for (size_t ti = begin; ti < end; ++ti) {
       const Triangle& tri = scene.triangles[ti];
       if (clusters && ti % kClusterTriangles == 0 && fe.meshInView(tri.face)) {  // (a cluster is in one mesh)
@@ -529,7 +522,15 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
         }
       }
     }
-    if (!only) break;
+  };
+  // The chunk's triangles, or those of `only` in it.
+  if (!only) {
+    segment(chunkBegin, chunkEnd);
+  } else {
+    for (auto r = std::lower_bound(only->begin(), only->end(), chunkBegin,
+                                   [](const TriangleRange& range, size_t t) { return range.end <= t; });
+         r != only->end() && r->first < chunkEnd; ++r)
+      segment(std::max<size_t>(chunkBegin, r->first), std::min<size_t>(chunkEnd, r->end));
   }
   if (batched) flush();
 }
