@@ -32,6 +32,9 @@ struct MeshRange {
   // for occlusion (the occlusion buffer's mesh culling, raster/tiled.hpp).
   uint32_t firstTriangle = 0, triangleCount = 0;
   uint32_t firstPlane = 0, planeCount = 0;
+  // Filled by Scene::finalize(): the vertices its faces use lie in positions[firstVertex, +
+  // vertexCount), a range no other mesh's faces use (Scene::meshVerticesApart), or nothing is said.
+  uint32_t firstVertex = 0, vertexCount = 0;
 };
 
 /// A plane n . x = d that triangles of a mesh lie in, with room: each such triangle's own unit
@@ -89,6 +92,10 @@ struct Scene {
   std::vector<TriangleCluster> clusters;
   // Filled by finalize(): the planes of the meshes (MeshRange::firstPlane, planeCount).
   std::vector<MeshPlane> meshPlanes;
+  // Filled by finalize(): whether each mesh's faces use vertices of its own range only
+  // (MeshRange::firstVertex, vertexCount), so that a renderer may transform a mesh's vertices
+  // only when it draws the mesh.
+  bool meshVerticesApart = false;
 
   std::optional<CameraSpec> camera;  // a camera stored in the scene file, if any
 

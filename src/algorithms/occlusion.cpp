@@ -55,7 +55,7 @@ struct OcclusionBuffer::Impl {
   std::vector<std::pair<double, uint32_t>> waiting;
   std::vector<uint32_t> drawn, touched;
   std::vector<uint8_t> hidden;
-  std::vector<TriangleRange> ranges;
+  std::vector<TriangleRange> ranges, vertexRuns;  // (vertexRuns: of vertices, not triangles)
   // One kept tile per screen tile, between calls (each rasterized in a worker's scratch, then
   // stored: tiled::storeTile). Allocated without initialising (each pass sets every tile's
   // summary; pixel values are written before they are read).
@@ -68,6 +68,7 @@ struct OcclusionBuffer::Impl {
   int width = 0, height = 0;  // of the last completed render (0: nothing rendered)
 
   void tilePass(algo::TiledState& pass, bool first, Stats& st);
+  void transformVerticesOf(const Scene& scene, const std::vector<uint32_t>& meshes, FrontEndOutput& vertices);
   void drawByMeshes(const Scene& scene, const RenderOptions& opt, Stats& st);
 
   int tileOf(int x, int y) const { return (y / tiled::kTileSize) * state.bins.tilesX + x / tiled::kTileSize; }
@@ -168,6 +169,35 @@ void OcclusionBuffer::Impl::tilePass(algo::TiledState& pass, bool first, Stats& 
   addPassStats(st, pass, counters);
 }
 
+// The vertex pass for the vertices of `meshes` (ascending; Scene::meshVerticesApart), in runs of
+// about kChunkTriangles vertices: on the calling thread up to kSerialVertices (a few
+// microseconds, less than handing them to the pool), on the pool beyond.
+void OcclusionBuffer::Impl::transformVerticesOf(const Scene& scene, const std::vector<uint32_t>& meshes,
+                                                FrontEndOutput& vertices) {
+  constexpr size_t kSerialVertices = 8192;
+  vertexRuns.clear();
+  size_t total = 0;
+  for (uint32_t m : meshes) {
+    const MeshRange& mesh = scene.meshes[m];
+    if (mesh.vertexCount == 0) continue;
+    total += mesh.vertexCount;
+    if (!vertexRuns.empty() && vertexRuns.back().end == mesh.firstVertex &&
+        vertexRuns.back().end - vertexRuns.back().first < kChunkTriangles)
+      vertexRuns.back().end += mesh.vertexCount;
+    else
+      vertexRuns.push_back({mesh.firstVertex, mesh.firstVertex + mesh.vertexCount});
+  }
+  auto run = [&](size_t i) {
+    const TriangleRange& r = vertexRuns[i];
+    transformVertices(scene.positions.data() + r.first, r.end - r.first, vertices.pixelFromWorld, camera,
+                      vertices.outcodes.data() + r.first, vertices.projected.data() + r.first);
+  };
+  if (total > kSerialVertices)
+    parallelFor(0, vertexRuns.size(), threads, run);
+  else
+    for (size_t i = 0; i < vertexRuns.size(); ++i) run(i);
+}
+
 // Draws the scene mesh by mesh, nearest first, dropping the meshes found hidden (see kMinMeshes).
 void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions& opt, Stats& st) {
   Timer timer;
@@ -178,12 +208,18 @@ void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions
   const MeshView view = meshView(camera, depth);
   tests.resize(meshCount);
   bounds.resize(meshCount);
-  runVertexPass(scene, camera, opt, first.fe, [&](size_t firstMesh, size_t lastMesh) {
-    meshBounds(scene, firstMesh, lastMesh, view, tests.data() + firstMesh, bounds.data() + firstMesh);
-    for (size_t m = firstMesh; m < lastMesh; ++m)
-      if (first.fe.meshCulled[m]) tests[m] = MeshTest::Outside;
-  });
-  const FrontEndOutput& vertices = first.fe;
+  // When each mesh's vertices are its own (Scene::meshVerticesApart), only the vertices of the
+  // meshes a pass draws are transformed, before its set-up (most of the city's are never).
+  const bool byMesh = scene.meshVerticesApart;
+  runVertexPass(
+      scene, camera, opt, first.fe,
+      [&](size_t firstMesh, size_t lastMesh) {
+        meshBounds(scene, firstMesh, lastMesh, view, tests.data() + firstMesh, bounds.data() + firstMesh);
+        for (size_t m = firstMesh; m < lastMesh; ++m)
+          if (first.fe.meshCulled[m]) tests[m] = MeshTest::Outside;
+      },
+      !byMesh);
+  FrontEndOutput& vertices = first.fe;
   // The meshes that draw nothing are left out (their triangles counted as set-up would: outside
   // the view); those without a bound are drawn first (they may hide others; nothing can show
   // them hidden); the others wait, nearest first.
@@ -209,6 +245,7 @@ void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions
       waiting.erase(waiting.begin(), waiting.begin() + perPass);
     }
     std::sort(drawn.begin(), drawn.end());
+    if (byMesh) transformVerticesOf(scene, drawn, vertices);
     ranges.clear();
     for (uint32_t m : drawn) {
       const MeshRange& mesh = scene.meshes[m];

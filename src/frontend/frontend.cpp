@@ -538,7 +538,7 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
 }  // namespace
 
 void runVertexPass(const Scene& scene, const Camera& cam, const RenderOptions& options, FrontEndOutput& out,
-                   const MeshConsumer& meshConsumer) {
+                   const MeshConsumer& meshConsumer, bool vertices) {
   const int threads = resolveThreads(options.threads);
 
   // Every vertex once, in double, straight from world to homogeneous pixel coordinates; those
@@ -577,7 +577,7 @@ void runVertexPass(const Scene& scene, const Camera& cam, const RenderOptions& o
   };
 
   // The vertex pass's chunks, then the mesh tests' runs, as items of one parallel loop.
-  const size_t vertexChunks = (nv + kChunkTriangles - 1) / kChunkTriangles;
+  const size_t vertexChunks = vertices ? (nv + kChunkTriangles - 1) / kChunkTriangles : 0;
   constexpr size_t kMeshesPerItem = 512;
   const size_t meshItems = (meshCount + kMeshesPerItem - 1) / kMeshesPerItem;
   parallelFor(0, vertexChunks + meshItems, threads, [&](size_t c) {

@@ -310,9 +310,11 @@ struct TriangleRange {
 /// up: the chunks stay the same, the others are left out as if culled, uncounted.
 /// `meshConsumer`, when given, is called with runs [first, last) of meshes whose view test
 /// (FrontEndOutput::meshCulled) is done, on the worker that did it, while the vertex pass goes on.
+/// With `vertices` false, only the meshes are tested: the caller transforms the vertices it
+/// needs (transformVertices into `out.outcodes` and `out.projected`, sized here) before set-up.
 using MeshConsumer = std::function<void(size_t first, size_t last)>;
 void runVertexPass(const Scene& scene, const Camera& camera, const RenderOptions& options, FrontEndOutput& out,
-                   const MeshConsumer& meshConsumer = {});
+                   const MeshConsumer& meshConsumer = {}, bool vertices = true);
 void runSetUp(const Scene& scene, const Camera& camera, const RenderOptions& options, const FrontEndOutput& vertices,
               FrontEndOutput& out, const ChunkConsumer& consumer = {}, const DepthSetup* nearestFor = nullptr,
               bool deferBackFaces = false, bool deferClusters = true, const std::vector<TriangleRange>* only = nullptr);

@@ -135,7 +135,7 @@ void append(Scene& scene, const Scene& sub, const dmat4& worldFromMesh, const st
   // Mesh ranges of the sub-scene (it is not finalized: faces before its first range get one).
   std::vector<MeshRange> ranges = sub.meshes;
   if (ranges.empty() || ranges.front().firstFace != 0)
-    ranges.insert(ranges.begin(), MeshRange{fs::path(sub.source).stem().string(), 0, 0, {}, 0, 0, 0, 0});
+    ranges.insert(ranges.begin(), MeshRange{fs::path(sub.source).stem().string(), 0, 0, {}, 0, 0, 0, 0, 0, 0});
   auto rangeName = [&](const MeshRange& r) {
     if (prefix.empty()) return r.name;
     return ranges.size() == 1 ? prefix : prefix + "/" + r.name;

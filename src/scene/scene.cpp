@@ -134,7 +134,7 @@ void Scene::addFace(std::span<const uint32_t> indices, Rgba8 color) {
 void Scene::beginMesh(std::string name) {
   uint32_t first = uint32_t(faceCount());
   if (!meshes.empty()) meshes.back().faceCount = first - meshes.back().firstFace;
-  meshes.push_back({std::move(name), first, 0, {}, 0, 0, 0, 0});
+  meshes.push_back({std::move(name), first, 0, {}, 0, 0, 0, 0, 0, 0});
 }
 
 void Scene::finalize() {
@@ -194,7 +194,7 @@ void Scene::finalize() {
   // when none was begun), counts recomputed from the starts, empty ranges dropped.
   const uint32_t total = uint32_t(faceCount());
   if (meshes.empty() || meshes.front().firstFace != 0)
-    meshes.insert(meshes.begin(), MeshRange{std::filesystem::path(source).stem().string(), 0, 0, {}, 0, 0, 0, 0});
+    meshes.insert(meshes.begin(), MeshRange{std::filesystem::path(source).stem().string(), 0, 0, {}, 0, 0, 0, 0, 0, 0});
   for (size_t m = 0; m < meshes.size(); ++m) {
     uint32_t end = m + 1 < meshes.size() ? meshes[m + 1].firstFace : total;
     if (end < meshes[m].firstFace || end > total)
@@ -209,6 +209,18 @@ void Scene::finalize() {
   }
   buildClusters(*this);
   buildMeshPlanes(*this);
+  // Each mesh's vertex range, and whether the ranges are apart (ascending, not overlapping).
+  meshVerticesApart = true;
+  uint64_t end = 0;
+  for (MeshRange& mesh : meshes) {
+    uint32_t lo = std::numeric_limits<uint32_t>::max(), hi = 0;
+    for (uint32_t f = mesh.firstFace; f < mesh.firstFace + mesh.faceCount; ++f)
+      for (uint32_t v : face(f)) lo = std::min(lo, v), hi = std::max(hi, v);
+    mesh.firstVertex = lo <= hi ? lo : uint32_t(end);
+    mesh.vertexCount = lo <= hi ? hi - lo + 1 : 0;
+    if (mesh.vertexCount && mesh.firstVertex < end) meshVerticesApart = false;
+    if (mesh.vertexCount) end = uint64_t(mesh.firstVertex) + mesh.vertexCount;
+  }
 }
 
 
