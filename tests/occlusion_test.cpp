@@ -402,6 +402,37 @@ TEST(Occlusion, MeshCullingChangesNoStoredValue) {
   EXPECT_GT(culled, 10000u);
 }
 
+// render()'s depth-only frames of scenes with many meshes go through an occlusion buffer with
+// mesh culling: the same depth bits as the reference's depth-only frame, 1 and 2 threads.
+TEST(Occlusion, DepthOnlyRenderWithMeshCullingIsTheReference) {
+  uint64_t culled = 0;
+  for (const Scene& scene : {loadScene("builtin:city"), test::rotatedBoxes(1000, 13)})
+    for (const Camera& cam : meshCameras(scene, 320, 200, 3, 41))
+      for (const char* f : {"f32:reversed", "u16:z", "u24:inv"})
+        for (Cull cull : {Cull::None, Cull::Back}) {
+          const DepthFormat format = DepthFormat::parse(f);
+          RenderOptions o;
+          o.depthFormat = format;
+          o.cull = cull;
+          o.outputs = FrameOutputs::DepthOnly;
+          o.raster = RasterKind::HalfSpace;
+          o.threads = 1;
+          const Frame reference = render(scene, cam, o);
+          o.raster = RasterKind::Tiled;
+          for (int threads : {1, 2}) {
+            o.threads = threads;
+            const Frame frame = render(scene, cam, o);
+            const std::string what = fmt::format("{} {} cull {} threads {}", scene.source, f, int(cull), threads);
+            const long at = firstDifference(reference.depth, frame.depth);
+            ASSERT_EQ(at, -1) << what << " at pixel " << at;
+            EXPECT_EQ(frame.stats.covered_pixels, reference.stats.covered_pixels) << what;
+            EXPECT_EQ(frame.stats.algorithm, "zbuffer") << what;
+            culled += frame.stats.meshes_culled_occlusion.value_or(0);
+          }
+        }
+  EXPECT_GT(culled, 1000u) << "the depth-only frames went through mesh culling";
+}
+
 TEST(Occlusion, BadUseIsAClearError) {
   OcclusionBuffer buffer;
   EXPECT_THROW(buffer.rectVisible(0, 0, 1, 1, 1.0), InputError);

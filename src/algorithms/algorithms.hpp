@@ -18,4 +18,9 @@ Stats frameStats(const Scene& scene, const Camera& camera);
 /// suits the camera (render.cpp; also checked by the occlusion buffer).
 void checkImage(const Camera& camera, DepthFormat format);
 
+/// Whether the occlusion buffer culls this scene mesh by mesh (occlusion.cpp: at least 64
+/// meshes, a perspective camera, HSR_MESH_CULLING not off). zbuffer's depth-only frames of such
+/// scenes go through an occlusion buffer and its depthImage (the same bits).
+bool meshCullingApplies(const Scene& scene, const Camera& camera);
+
 }  // namespace hsr::algo

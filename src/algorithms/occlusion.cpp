@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <mutex>
 
 #include "algorithms/algorithms.hpp"
 #include "algorithms/tiled_pass.hpp"
@@ -41,6 +42,10 @@ bool meshCulling() {
 
 }  // namespace
 
+bool algo::meshCullingApplies(const Scene& scene, const Camera& camera) {
+  return !camera.orthographic && scene.meshes.size() >= kMinMeshes && meshCulling();
+}
+
 struct OcclusionBuffer::Impl {
   algo::TiledState state;  // the vertex pass, the first pass's set-up and bins, the workers' scratch
   // Passes after the first (mesh culling): their set-up records and bins stay alive until the
@@ -66,6 +71,12 @@ struct OcclusionBuffer::Impl {
   Stats stats;
   int threads = 1;
   int width = 0, height = 0;  // of the last completed render (0: nothing rendered)
+
+  // depthImage's scratch, kept from call to call (used by one query at a time: resolveMutex).
+  mutable std::mutex resolveMutex;
+  mutable std::vector<tiled::TileScratch> resolveScratch;
+  mutable std::vector<uint64_t> resolveCovered;
+  mutable WorkQueue resolveWork;
 
   void tilePass(algo::TiledState& pass, bool first, Stats& st);
   void transformVerticesOf(const Scene& scene, const std::vector<uint32_t>& meshes, FrontEndOutput& vertices);
@@ -312,7 +323,7 @@ const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, c
     im.tiles.reset(new tiled::KeptTile[tiles]);  // default-initialised: see Impl::tiles
     im.tileCapacity = tiles;
   }
-  if (!camera.orthographic && scene.meshes.size() >= kMinMeshes && meshCulling()) {
+  if (algo::meshCullingApplies(scene, camera)) {
     im.drawByMeshes(scene, opt, st);
   } else {
     algo::setUpAndBin(scene, camera, opt, im.depth, im.state);
@@ -389,14 +400,36 @@ void OcclusionBuffer::depthImage(Frame& frame) const {
   const tiled::Bins& bins = im.state.bins;
   frame.allocate(bins.width, bins.height, FrameOutputs::DepthOnly);
   frame.stats = im.stats;
-  // One tile row per task: each kept tile unpacked into the task's scratch, then resolved.
-  std::vector<uint64_t> covered(size_t(bins.tilesY), 0);
-  parallelFor(0, size_t(bins.tilesY), im.threads, [&](size_t ty) {
-    const auto scratch = std::make_unique<tiled::TileScratch>();
-    for (int tx = 0; tx < bins.tilesX; ++tx) {
-      const int tile = int(ty) * bins.tilesX + tx;
-      tiled::loadTile(im.tiles[size_t(tile)], im.depth, *scratch);
-      covered[ty] += tiled::resolveTile(bins, tile, im.depth, FrameOutputs::DepthOnly, nullptr, Rgba8{}, *scratch, frame);
+  // Segments of up to kSegmentTiles tiles of a tile row, as render() resolves them: each kept
+  // tile unpacked into the task's scratch, then the segment written band by band across its
+  // tiles (long row pieces, not 64-pixel ones). The scratch is the buffer's own, kept from call
+  // to call, unless another thread is querying the buffer meanwhile: then this call's own.
+  constexpr int kSegmentTiles = 8, kBand = 8;
+  const int segmentsX = (bins.tilesX + kSegmentTiles - 1) / kSegmentTiles;
+  const size_t segments = size_t(segmentsX) * size_t(bins.tilesY);
+  const int workers = int(std::min<size_t>(segments, size_t(im.threads)));
+  std::unique_lock lock(im.resolveMutex, std::try_to_lock);
+  std::vector<tiled::TileScratch> ownScratch;
+  std::vector<uint64_t> ownCovered;
+  WorkQueue ownWork;
+  const bool kept = lock.owns_lock();
+  std::vector<tiled::TileScratch>& scratch = kept ? im.resolveScratch : ownScratch;
+  std::vector<uint64_t>& covered = kept ? im.resolveCovered : ownCovered;
+  WorkQueue& work = kept ? im.resolveWork : ownWork;
+  if (scratch.size() < size_t(workers) * kSegmentTiles) scratch.resize(size_t(workers) * kSegmentTiles);
+  covered.assign(size_t(workers), 0);
+  work.reset(segments, size_t(workers));
+  parallelFor(0, size_t(workers), workers, [&](size_t worker) {
+    tiled::TileScratch* mine = scratch.data() + worker * kSegmentTiles;
+    const size_t part = currentPart();
+    for (size_t seg = work.next(part); seg < segments; seg = work.next(part)) {
+      const int ty = int(seg) / segmentsX, tx0 = (int(seg) % segmentsX) * kSegmentTiles;
+      const int count = std::min(kSegmentTiles, bins.tilesX - tx0), first = ty * bins.tilesX + tx0;
+      for (int i = 0; i < count; ++i) tiled::loadTile(im.tiles[size_t(first + i)], im.depth, mine[i]);
+      for (int row = 0; row < tiled::kTileSize; row += kBand)
+        for (int i = 0; i < count; ++i)
+          covered[worker] += tiled::resolveTile(bins, first + i, im.depth, FrameOutputs::DepthOnly, nullptr, Rgba8{},
+                                                mine[i], frame, row, row + kBand);
     }
     tiled::finishResolves();
   });
