@@ -8,8 +8,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdlib>
-#include <cstring>
 #include <limits>
 #include <mutex>
 
@@ -34,16 +32,11 @@ namespace {
 // passes of 1/20 faster than 1/10, 1/30 or 3 to 4 passes: each tile pass has its cost.)
 constexpr size_t kMinMeshes = 64, kMaxPasses = 2, kPassShare = 20, kPassMeshes = 16;
 
-// HSR_MESH_CULLING=off turns mesh culling off, for tests and measurements (same depth bits).
-bool meshCulling() {
-  const char* v = std::getenv("HSR_MESH_CULLING");
-  return !(v && !std::strcmp(v, "off"));
-}
-
 }  // namespace
 
+// HSR_MESH_CULLING=off turns mesh culling off, for tests and measurements (same depth bits).
 bool algo::meshCullingApplies(const Scene& scene, const Camera& camera) {
-  return !camera.orthographic && scene.meshes.size() >= kMinMeshes && meshCulling();
+  return !camera.orthographic && scene.meshes.size() >= kMinMeshes && !algo::switchedOff("HSR_MESH_CULLING");
 }
 
 struct OcclusionBuffer::Impl {

@@ -30,16 +30,17 @@ uint64_t TiledState::memoryBytes() const {
   return bytes;
 }
 
-bool deferBackFaces(const RenderOptions& opt) {
-  if (opt.cull != Cull::None) return false;  // culled already, or (cull front) nothing in front to draw first
-  const char* force = std::getenv("HSR_DEFER_BACK_FACES");
-  return !(force && !std::strcmp(force, "off"));
+bool switchedOff(const char* name) {
+  const char* value = std::getenv(name);
+  return value && !std::strcmp(value, "off");
 }
 
-bool deferClusters() {
-  const char* force = std::getenv("HSR_DEFER_CLUSTERS");
-  return !(force && !std::strcmp(force, "off"));
+bool deferBackFaces(const RenderOptions& opt) {
+  if (opt.cull != Cull::None) return false;  // culled already, or (cull front) nothing in front to draw first
+  return !switchedOff("HSR_DEFER_BACK_FACES");
 }
+
+bool deferClusters() { return !switchedOff("HSR_DEFER_CLUSTERS"); }
 
 void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt, const DepthSetup& depth,
                  TiledState& state, const FrontEndOutput* vertices, const std::vector<TriangleRange>* only) {

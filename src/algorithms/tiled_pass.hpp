@@ -31,6 +31,11 @@ struct TiledState {
   uint64_t memoryBytes() const;
 };
 
+/// Whether environment variable `name` is set to "off" (the tiled path's switches below and the
+/// occlusion buffer's HSR_MESH_CULLING: each leaves the image the same bits, for tests and
+/// measurements).
+bool switchedOff(const char* name);
+
 /// Whether a frame defers its back faces (raster/tiled.hpp, binChunk): when it draws both sides
 /// (cull none). The environment variable HSR_DEFER_BACK_FACES=off turns it off, for tests and
 /// measurements: the image is the same bits either way.
