@@ -433,6 +433,100 @@ TEST(Occlusion, DepthOnlyRenderWithMeshCullingIsTheReference) {
   EXPECT_GT(culled, 1000u) << "the depth-only frames went through mesh culling";
 }
 
+// Quads facing the camera in pairs of meshes that tie: mesh 2k holds a quad, mesh 2k + 1 the
+// same quad and a small triangle far nearer, elsewhere (so that it is drawn in mesh culling's
+// first pass, and its twin is tested against it). Each twin's fragments equal what the first pass
+// stored there, and the first submitted wins a tie: the earlier mesh shows. Behind them a wall of
+// 8192 triangles (render() culls meshes for frames of 8192 triangles or more).
+Scene tiedQuads(int pairs, uint64_t seed) {
+  Scene s;
+  s.source = "test:tied-quads";
+  std::mt19937_64 rng(seed);
+  auto u = [&] { return double(rng() >> 11) * 0x1.0p-53; };
+  auto quad = [&](dvec3 lo, double w, double h, Rgba8 color) {
+    const uint32_t b = uint32_t(s.positions.size());
+    s.positions.push_back(lo);
+    s.positions.push_back(lo + dvec3(w, 0, 0));
+    s.positions.push_back(lo + dvec3(w, h, 0));
+    s.positions.push_back(lo + dvec3(0, h, 0));
+    s.addFace({b, b + 1, b + 2, b + 3}, color);
+  };
+  for (int k = 0; k < pairs; ++k) {
+    const double z = -5 - 5 * u();
+    const dvec3 lo{(u() * 2 - 1) * 2.5, (u() * 2 - 1) * 1.8, z};
+    const double w = 0.2 + 0.6 * u(), h = 0.2 + 0.6 * u();
+    const Rgba8 color{uint8_t(rng()), uint8_t(rng()), uint8_t(rng()), 255};
+    s.beginMesh("quad " + std::to_string(k));
+    quad(lo, w, h, color);
+    s.beginMesh("twin " + std::to_string(k));
+    quad(lo, w, h, color);
+    const uint32_t b = uint32_t(s.positions.size());
+    const dvec3 c{(u() * 2 - 1) * 0.5, (u() * 2 - 1) * 0.4, -1 - 0.001 * k};
+    s.positions.push_back(c);
+    s.positions.push_back(c + dvec3(0.01, 0, 0));
+    s.positions.push_back(c + dvec3(0, 0.01, 0));
+    s.addFace({b, b + 1, b + 2}, color);
+  }
+  s.beginMesh("wall");
+  constexpr int kCells = 64;
+  for (int i = 0; i < kCells; ++i)
+    for (int j = 0; j < kCells; ++j)
+      quad(dvec3(-12 + 24.0 * i / kCells, -8 + 16.0 * j / kCells, -20), 24.0 / kCells, 16.0 / kCells,
+           Rgba8{uint8_t(4 * i), uint8_t(4 * j), 90, 255});
+  s.finalize();
+  return s;
+}
+
+// render()'s frames with ids of scenes with many meshes go through mesh culling (a depth-only
+// first pass, then the frame of the meshes not found hidden): every buffer is the same bits as
+// with mesh culling off — face and triangle ids, colour and depth — for box buildings, turned
+// boxes, vertices in reverse order and quads that tie with their twins (where dropping a mesh
+// behind values equal to its bound would show the later twin).
+TEST(Occlusion, FramesWithIdsAndMeshCullingAreTheSameBits) {
+  uint64_t culled = 0, culledTied = 0;
+  int compared = 0;
+  std::vector<Scene> scenes;
+  scenes.push_back(tiedQuads(400, 17));
+  scenes.push_back(loadScene("builtin:city"));
+  scenes.push_back(test::rotatedBoxes(1000, 13));
+  scenes.push_back(reversedVertices(1000, 7));
+  ASSERT_GE(scenes[0].triangles.size(), 8192u);
+  for (const Scene& scene : scenes) {
+    const bool tied = &scene == &scenes[0];
+    const std::vector<Camera> cams =
+        tied ? std::vector<Camera>{resolveCamera(test::lookAt(dvec3(0), dvec3(0, 0, -1), 60, 0.5, 50), 320, 200,
+                                                 scene.bounds())}
+             : meshCameras(scene, 320, 200, 2, 43);
+    for (const Camera& cam : cams)
+      for (const char* f : {"f32:reversed", "u16:z", "u24:inv", "f32:z"})
+        for (Cull cull : {Cull::None, Cull::Back})
+          for (int threads : {1, 2}) {
+            RenderOptions o;
+            o.depthFormat = DepthFormat::parse(f);
+            o.cull = cull;
+            o.threads = threads;
+            const std::string what = fmt::format("{} {} cull {} threads {}", scene.source, f, int(cull), threads);
+            setenv("HSR_MESH_CULLING", "off", 1);
+            const Frame plain = render(scene, cam, o);
+            unsetenv("HSR_MESH_CULLING");
+            const Frame frame = render(scene, cam, o);
+            EXPECT_FALSE(plain.stats.meshes_culled_occlusion.has_value()) << what;
+            (tied ? culledTied : culled) += frame.stats.meshes_culled_occlusion.value_or(0);
+            ++compared;
+            ASSERT_EQ(firstDifference(plain.faceId, frame.faceId), -1) << what;
+            ASSERT_EQ(firstDifference(plain.triangleId, frame.triangleId), -1) << what;
+            ASSERT_EQ(firstDifference(plain.color, frame.color), -1) << what;
+            ASSERT_EQ(firstDifference(plain.depth, frame.depth), -1) << what;
+            EXPECT_EQ(frame.stats.covered_pixels, plain.stats.covered_pixels) << what;
+          }
+  }
+  RecordProperty("meshes_culled", int(culled));
+  RecordProperty("tied_meshes_culled", int(culledTied));
+  EXPECT_EQ(compared, (1 + 3 * 4) * 4 * 2 * 2);
+  EXPECT_GT(culled, 1000u) << "the frames went through mesh culling";
+  EXPECT_GT(culledTied, 0u) << "some quads were found hidden";
+}
+
 TEST(Occlusion, BadUseIsAClearError) {
   OcclusionBuffer buffer;
   EXPECT_THROW(buffer.rectVisible(0, 0, 1, 1, 1.0), InputError);

@@ -23,6 +23,14 @@
 
 namespace hsr {
 
+class OcclusionBuffer;
+namespace algo {
+struct MeshCulling;
+// Internal (src/algorithms/occlusion.cpp): render()'s frames with ids use a buffer's mesh culling.
+const MeshCulling& cullMeshes(OcclusionBuffer& buffer, const Scene& scene, const Camera& camera,
+                              const RenderOptions& options);
+}  // namespace algo
+
 struct OcclusionOptions {
   DepthFormat depthFormat;  // default f32:reversed
   Cull cull = Cull::None;   // occluders are two-sided unless back/front
@@ -76,6 +84,7 @@ class OcclusionBuffer {
   void depthImage(Frame& frame) const;
 
  private:
+  friend const algo::MeshCulling& algo::cullMeshes(OcclusionBuffer&, const Scene&, const Camera&, const RenderOptions&);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -31,6 +31,9 @@ namespace {
 // at least kPassMeshes; the last pass, every mesh left. (City at 1920x1080, 2 threads: 2
 // passes of 1/20 faster than 1/10, 1/30 or 3 to 4 passes: each tile pass has its cost.)
 constexpr size_t kMinMeshes = 64, kMaxPasses = 2, kPassShare = 20, kPassMeshes = 16;
+// For a frame with ids (algo::cullMeshes), the first pass is drawn again by the frame, so it
+// draws fewer: the nearest 40th (city, 1920x1080 and 640x480: 1.07x over a 20th; culls as many).
+constexpr size_t kFramePassShare = 40;
 
 }  // namespace
 
@@ -51,9 +54,10 @@ struct OcclusionBuffer::Impl {
   std::vector<MeshTest> tests;
   std::vector<MeshBound> bounds;
   std::vector<std::pair<double, uint32_t>> waiting;
-  std::vector<uint32_t> drawn, touched;
+  std::vector<uint32_t> drawn, touched, firstDrawn;
   std::vector<uint8_t> hidden;
   std::vector<TriangleRange> ranges, vertexRuns;  // (vertexRuns: of vertices, not triangles)
+  algo::MeshCulling culling;  // for a frame with ids (algo::cullMeshes)
   // One kept tile per screen tile, between calls (each rasterized in a worker's scratch, then
   // stored: tiled::storeTile). Allocated without initialising (each pass sets every tile's
   // summary; pixel values are written before they are read).
@@ -73,7 +77,14 @@ struct OcclusionBuffer::Impl {
 
   void tilePass(algo::TiledState& pass, bool first, Stats& st);
   void transformVerticesOf(const Scene& scene, const std::vector<uint32_t>& meshes, FrontEndOutput& vertices);
-  void drawByMeshes(const Scene& scene, const RenderOptions& opt, Stats& st);
+  // With forFrame: the first pass only, then `culling` (algo::cullMeshes).
+  void drawByMeshes(const Scene& scene, const RenderOptions& opt, Stats& st, bool forFrame = false);
+  void prepare(const Camera& camera, const RenderOptions& opt);
+  uint64_t memoryBytes() const {
+    uint64_t bytes = state.memoryBytes() + tileCapacity * sizeof(tiled::KeptTile) + state.fe.memoryBytes();
+    for (size_t p = 1; p < passes; ++p) bytes += later[p - 1].memoryBytes() + later[p - 1].fe.memoryBytes();
+    return bytes;
+  }
 
   int tileOf(int x, int y) const { return (y / tiled::kTileSize) * state.bins.tilesX + x / tiled::kTileSize; }
 
@@ -98,9 +109,14 @@ struct OcclusionBuffer::Impl {
   double storedOf(double d, int steps) const {
     double q = 0;
     visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() {
+      q = double(quantizeDepth<S>(mapDepth<M>(d, depth.near, depth.far, depth.orthographic)));
+    });
+    return stepsNearer(q, steps);
+  }
+  // Stored value q (of the format), `steps` storage steps nearer.
+  double stepsNearer(double q, int steps) const {
+    visitDepthFormat(depth.format, [&]<DepthStorage S, DepthMapping M>() {
       constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
-      const DepthT<S> v = quantizeDepth<S>(mapDepth<M>(d, depth.near, depth.far, depth.orthographic));
-      q = double(v);
       for (int i = 0; i < steps; ++i) {
         if constexpr (S == DepthStorage::F32)
           q = double(std::nextafter(float(q), greater ? std::numeric_limits<float>::infinity()
@@ -202,8 +218,21 @@ void OcclusionBuffer::Impl::transformVerticesOf(const Scene& scene, const std::v
     for (size_t i = 0; i < vertexRuns.size(); ++i) run(i);
 }
 
+namespace {
+// The triangles of `meshes` (ascending) as ranges, neighbours joined.
+void trianglesOf(const Scene& scene, const std::vector<uint32_t>& meshes, std::vector<TriangleRange>& ranges) {
+  ranges.clear();
+  for (uint32_t m : meshes) {
+    const MeshRange& mesh = scene.meshes[m];
+    if (mesh.triangleCount == 0) continue;
+    if (!ranges.empty() && ranges.back().end == mesh.firstTriangle) ranges.back().end += mesh.triangleCount;
+    else ranges.push_back({mesh.firstTriangle, mesh.firstTriangle + mesh.triangleCount});
+  }
+}
+}  // namespace
+
 // Draws the scene mesh by mesh, nearest first, dropping the meshes found hidden (see kMinMeshes).
-void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions& opt, Stats& st) {
+void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions& opt, Stats& st, bool forFrame) {
   Timer timer;
   algo::TiledState& first = state;
   // Every mesh in view bounded, within the vertex pass (each run of meshes once its view test is
@@ -229,13 +258,16 @@ void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions
   // them hidden); the others wait, nearest first.
   waiting.clear();
   drawn.clear();
+  uint64_t outside = 0;
   for (size_t m = 0; m < meshCount; ++m) {
     const MeshRange& mesh = scene.meshes[m];
-    if (tests[m] == MeshTest::Outside) st.culled_frustum += mesh.triangleCount;
+    if (tests[m] == MeshTest::Outside) outside += mesh.triangleCount;
     else if (tests[m] == MeshTest::None) drawn.push_back(uint32_t(m));
     else waiting.emplace_back(bounds[m].zMin, uint32_t(m));
   }
-  const size_t perPass = std::max(kPassMeshes, waiting.size() / kPassShare);
+  st.culled_frustum += outside;
+  culling.trianglesOutside = outside;
+  const size_t perPass = std::max(kPassMeshes, waiting.size() / (forFrame ? kFramePassShare : kPassShare));
   uint64_t culledMeshes = 0, culledTriangles = 0;
   size_t p = 0;
   for (;; ++p) {
@@ -250,13 +282,8 @@ void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions
     }
     std::sort(drawn.begin(), drawn.end());
     if (byMesh) transformVerticesOf(scene, drawn, vertices);
-    ranges.clear();
-    for (uint32_t m : drawn) {
-      const MeshRange& mesh = scene.meshes[m];
-      if (mesh.triangleCount == 0) continue;
-      if (!ranges.empty() && ranges.back().end == mesh.firstTriangle) ranges.back().end += mesh.triangleCount;
-      else ranges.push_back({mesh.firstTriangle, mesh.firstTriangle + mesh.triangleCount});
-    }
+    trianglesOf(scene, drawn, ranges);
+    if (forFrame) firstDrawn.swap(drawn);
     drawn.clear();
     if (p > 0 && later.size() < p) later.resize(p);
     algo::TiledState& pass = p == 0 ? first : later[p - 1];
@@ -266,13 +293,15 @@ void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions
     st.addTime("raster", timer.lap());
     if (waiting.empty()) break;
     // The meshes left, tested against what the kept tiles hold now (in parallel: each test reads
-    // the tiles and writes its own entry only). Hidden now, hidden at the end.
+    // the tiles and writes its own entry only). Hidden now, hidden at the end. For a frame with
+    // ids, hidden only behind values strictly nearer than its bound (a tie may be the mesh's).
     hidden.assign(waiting.size(), 0);
     constexpr size_t kTestsPerItem = 64;
+    const int strict = forFrame ? 1 : 0;
     parallelFor(0, (waiting.size() + kTestsPerItem - 1) / kTestsPerItem, threads, [&](size_t item) {
       for (size_t i = item * kTestsPerItem, end = std::min(waiting.size(), i + kTestsPerItem); i < end; ++i) {
         const MeshBound& b = bounds[waiting[i].second];
-        hidden[i] = !anyFarther(b.minX, b.minY, b.maxX, b.maxY, b.nearest);
+        hidden[i] = !anyFarther(b.minX, b.minY, b.maxX, b.maxY, stepsNearer(b.nearest, strict));
       }
     });
     size_t kept = 0;
@@ -286,12 +315,59 @@ void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions
     }
     waiting.resize(kept);
     st.addTime("frontend", timer.lap());
-    if (waiting.empty()) break;
+    if (waiting.empty() || forFrame) break;
   }
   passes = p + 1;
+  if (forFrame) {
+    // What the frame draws: the first pass's meshes and those left (their vertices transformed).
+    drawn.clear();
+    for (const auto& w : waiting) drawn.push_back(w.second);
+    std::sort(drawn.begin(), drawn.end());
+    if (byMesh) transformVerticesOf(scene, drawn, vertices);
+    drawn.insert(drawn.end(), firstDrawn.begin(), firstDrawn.end());
+    std::sort(drawn.begin(), drawn.end());
+    trianglesOf(scene, drawn, culling.ranges);
+    drawn.clear();
+    culling.vertices = &vertices;
+    culling.meshesCulled = culledMeshes;
+    culling.trianglesCulled = culledTriangles;
+  }
   st.occlusion_passes = passes;
   st.meshes_culled_occlusion = culledMeshes;
   st.triangles_culled_occlusion = culledTriangles;
+}
+
+// A render's start: the camera, depth setup and thread count; the kept tiles sized for the image
+// (the bins' geometry, which every pass shares).
+void OcclusionBuffer::Impl::prepare(const Camera& cam, const RenderOptions& opt) {
+  threads = resolveThreads(opt.threads);
+  camera = cam;
+  depth = DepthSetup{opt.depthFormat, cam.near, cam.far, cam.orthographic};
+  tiled::prepareBins(state.bins, cam.width, cam.height, 0);
+  const size_t count = size_t(state.bins.tileCount());
+  if (tileCapacity < count) {
+    tiles.reset(new tiled::KeptTile[count]);  // default-initialised: see Impl::tiles
+    tileCapacity = count;
+  }
+}
+
+const algo::MeshCulling& algo::cullMeshes(OcclusionBuffer& buffer, const Scene& scene, const Camera& camera,
+                                          const RenderOptions& options) {
+  OcclusionBuffer::Impl& im = *buffer.impl_;
+  im.width = im.height = 0;  // holds the first pass only: not to be queried
+  RenderOptions opt;
+  opt.depthFormat = options.depthFormat;
+  opt.cull = options.cull;
+  opt.threads = options.threads;
+  opt.outputs = FrameOutputs::DepthOnly;
+  im.prepare(camera, opt);
+  Stats& st = im.stats;
+  st = algo::frameStats(scene, camera);
+  im.drawByMeshes(scene, opt, st, true);
+  im.culling.depthTests = st.depth_tests;
+  im.culling.depthWrites = st.depth_writes;
+  im.culling.memoryBytes = im.memoryBytes();
+  return im.culling;
 }
 
 const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, const OcclusionOptions& options) {
@@ -304,18 +380,9 @@ const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, c
   opt.cull = options.cull;
   opt.threads = options.threads;
   opt.outputs = FrameOutputs::DepthOnly;
-  im.threads = resolveThreads(options.threads);
-  im.camera = camera;
-  im.depth = DepthSetup{opt.depthFormat, camera.near, camera.far, camera.orthographic};
+  im.prepare(camera, opt);
   Stats& st = im.stats;
   st = algo::frameStats(scene, camera);
-  // The kept tiles, sized for the image (the bins' geometry, which every pass shares).
-  tiled::prepareBins(im.state.bins, camera.width, camera.height, 0);
-  const size_t tiles = size_t(im.state.bins.tileCount());
-  if (im.tileCapacity < tiles) {
-    im.tiles.reset(new tiled::KeptTile[tiles]);  // default-initialised: see Impl::tiles
-    im.tileCapacity = tiles;
-  }
   if (algo::meshCullingApplies(scene, camera)) {
     im.drawByMeshes(scene, opt, st);
   } else {
@@ -328,8 +395,7 @@ const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, c
 
   st.algorithm = "occlusion";
   st.depth_format = opt.depthFormat.name();
-  st.memory_bytes = im.state.memoryBytes() + im.tileCapacity * sizeof(tiled::KeptTile) + im.state.fe.memoryBytes();
-  for (size_t p = 1; p < im.passes; ++p) st.memory_bytes += im.later[p - 1].memoryBytes() + im.later[p - 1].fe.memoryBytes();
+  st.memory_bytes = im.memoryBytes();
   st.addTime("total", total.ms());
   im.width = camera.width;
   im.height = camera.height;

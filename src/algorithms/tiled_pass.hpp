@@ -52,11 +52,30 @@ void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt
                  TiledState& state, const FrontEndOutput* vertices = nullptr,
                  const std::vector<TriangleRange>* only = nullptr);
 
+/// Mesh culling for render()'s frames with ids (zbuffer.cpp): the occlusion buffer's first pass
+/// of mesh culling (occlusion.cpp) drawn depth only into its kept tiles, every other mesh tested
+/// against them, and what is left to draw. A mesh is dropped only if every pixel of its box stores
+/// a value strictly nearer than any fragment of it can be (a tie may go to the mesh submitted
+/// first, so ties are not dropped): each pixel's nearest fragment, and the first submitted among
+/// equals, is then the same with it or without it — the same image, bit for bit.
+struct MeshCulling {
+  /// The vertex pass (runVertexPass) of every mesh in `ranges`, for runSetUp.
+  const FrontEndOutput* vertices = nullptr;
+  /// The triangles of every mesh neither outside the view nor hidden, ascending.
+  std::vector<TriangleRange> ranges;
+  uint64_t meshesCulled = 0, trianglesCulled = 0;  // hidden
+  uint64_t trianglesOutside = 0;                   // of the meshes outside the view (culled_frustum)
+  uint64_t depthTests = 0, depthWrites = 0;        // the first pass's
+  uint64_t memoryBytes = 0;                        // the occlusion buffer's
+};
+
 /// How many workers the binned frame's tile pass is worth (at most `threads`; small frames run
 /// on fewer, as handing work to a pool thread costs about as much as the kernel spends on ~4000
 /// small triangles), with one visit list each, and the per-tile counters cleared.
 /// With `touched`: a pass over only the tiles that have items, listed there in order.
-int prepareTilePass(TiledState& state, int threads, std::vector<uint32_t>* touched = nullptr);
+/// `meshesCulled`: a frame whose hidden meshes were dropped (MeshCulling): what is binned mostly
+/// shows, over many pixels, so each tile weighs as a kept tile does.
+int prepareTilePass(TiledState& state, int threads, std::vector<uint32_t>* touched = nullptr, bool meshesCulled = false);
 
 /// Hands the tile pass's `units` to its `workers` (state.tileWork, parts [0, workers)): unit u is
 /// the tiles [tilesOf(u).first, + tilesOf(u).second) of one tile row; each goes first to the

@@ -110,11 +110,11 @@ constexpr int kResolveBand = 8;
 // tiled::resolveTile). Each tile has one owner, so no locks; counters are kept per tile and
 // summed in tile order.
 void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const TriangleShader& shade, Frame& frame,
-               TiledState& state, Counters& n, tiled::RasterCounters& total) {
+               TiledState& state, Counters& n, tiled::RasterCounters& total, bool meshesCulled) {
   const tiled::Bins& bins = state.bins;
   const int segmentsX = (bins.tilesX + kSegmentTiles - 1) / kSegmentTiles;
   const size_t segments = size_t(segmentsX) * size_t(bins.tilesY);
-  const int workers = prepareTilePass(state, resolveThreads(opt.threads));
+  const int workers = prepareTilePass(state, resolveThreads(opt.threads), nullptr, meshesCulled);
   if (state.scratch.size() < size_t(workers) * kSegmentTiles) state.scratch.resize(size_t(workers) * kSegmentTiles);
   const bool ids = opt.outputs != FrameOutputs::DepthOnly;
   assignUnits(state, workers, segments, [&](size_t seg) {
@@ -167,14 +167,17 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
   const TriangleShader shade(scene, cam, opt.shading);  // back faces' colour, when they show
   FrontEndOutput& fe = isTiled ? state.fe : referenceFe;
 
-  // Depth only, many meshes and enough triangles: the occlusion buffer's passes with mesh
-  // culling, then its depth image (bit for bit this path's; docs/occlusion.md), the buffer kept
-  // by the calling thread. City 1.08x; on the 64 stacked layers (128 triangles) the kept tiles'
-  // extra pass cost more than culling saved (0.89x), hence the triangle count.
-  constexpr size_t kDepthByMeshesTriangles = 8192;
-  if (isTiled && opt.outputs == FrameOutputs::DepthOnly && scene.triangles.size() >= kDepthByMeshesTriangles &&
-      meshCullingApplies(scene, cam)) {
-    thread_local OcclusionBuffer occluders;
+  // Many meshes and enough triangles: mesh culling (docs/occlusion.md), through an occlusion
+  // buffer kept by the calling thread. Depth only: the buffer's passes, then its depth image (bit
+  // for bit this path's); city 1.08x. With ids: the buffer's first pass, then this path's frame
+  // of the meshes not found hidden (algo::cullMeshes). On the 64 stacked layers (128 triangles)
+  // the kept tiles' extra pass cost more than culling saved (depth only 0.89x), hence the
+  // triangle count.
+  constexpr size_t kByMeshesTriangles = 8192;
+  const bool byMeshes = isTiled && scene.triangles.size() >= kByMeshesTriangles && meshCullingApplies(scene, cam);
+  thread_local OcclusionBuffer callerOccluders;
+  OcclusionBuffer& occluders = callerOccluders;
+  if (byMeshes && opt.outputs == FrameOutputs::DepthOnly) {
     occluders.render(scene, cam, {opt.depthFormat, opt.cull, opt.threads});
     timer.lap();
     occluders.depthImage(frame);  // (its statistics: the buffer's, and covered_pixels)
@@ -185,13 +188,20 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
     st.memory_bytes += frame.depth.size() * sizeof(float);
     return;
   }
+  const MeshCulling* culling = nullptr;
   if (isTiled) {
     const DepthSetup depth{opt.depthFormat, cam.near, cam.far, cam.orthographic};
-    setUpAndBin(scene, cam, opt, depth, state);
+    if (byMeshes) {
+      culling = &cullMeshes(occluders, scene, cam, opt);
+      setUpAndBin(scene, cam, opt, depth, state, culling->vertices, &culling->ranges);
+    } else {
+      setUpAndBin(scene, cam, opt, depth, state);
+    }
     st.addTime("frontend", timer.lap());
-    drawTiled(opt, depth, shade, frame, state, n, tiledCounters);
+    drawTiled(opt, depth, shade, frame, state, n, tiledCounters, culling != nullptr);
     st.addTime("raster", timer.lap());
     bufferBytes = state.memoryBytes();
+    if (culling) bufferBytes += culling->memoryBytes;
   } else {
     runFrontEnd(scene, cam, opt, fe);
     const std::vector<SetupTriangle> tris = fe.flatten();
@@ -214,6 +224,14 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
   // writes the winner's id instead and its colour once per pixel at resolve (deferred), counted
   // like the reference, one per winning fragment.
   st.color_writes = has(opt.outputs, FrameOutputs::Color) ? st.depth_writes : 0;
+  if (culling) {  // the first pass's tests and writes too (depth only: no colour)
+    st.depth_tests += culling->depthTests;
+    st.depth_writes += culling->depthWrites;
+    st.culled_frustum += culling->trianglesOutside;
+    st.occlusion_passes = 2;
+    st.meshes_culled_occlusion = culling->meshesCulled;
+    st.triangles_culled_occlusion = culling->trianglesCulled;
+  }
   st.covered_pixels = n.covered;
   const uint64_t frameBytes = frame.depth.size() * sizeof(float) + frame.faceId.size() * sizeof(int32_t) +
                               frame.triangleId.size() * sizeof(int32_t) + frame.color.size() * sizeof(Rgba8);
