@@ -18,9 +18,9 @@
 namespace hsr {
 namespace {
 
-const std::vector<std::string> kSceneNames = {"cubes",         "random",         "sphere",
-                                              "layers",        "city",           "painter-midpoint",
-                                              "painter-cycle", "interpenetrate", "zfight"};
+const std::vector<std::string> kSceneNames = {"cubes",         "random",         "sphere",           "layers",
+                                              "city",          "clutter",        "painter-midpoint", "painter-cycle",
+                                              "interpenetrate", "zfight"};
 
 // Each default scene is generated once per test run (the sphere has a million triangles).
 const Scene& defaultScene(const std::string& name) {
@@ -185,6 +185,7 @@ TEST(Builtin, DefaultCountsMatchTheDocs) {
       {"sphere", {1003520, 1003520, 1, 501762}},
       {"layers", {64, 128, 64, 256}},
       {"city", {21601, 43202, 3601, 28804}},
+      {"clutter", {392001, 392002, 401, 196804}},
       {"painter-midpoint", {2, 4, 2, 8}},
       {"painter-cycle", {3, 6, 3, 12}},
       {"interpenetrate", {2, 4, 2, 8}},
@@ -203,7 +204,7 @@ TEST(Builtin, DefaultCountsMatchTheDocs) {
 
 TEST(Builtin, SameSpecSameScene) {
   for (const std::string spec :
-       {"cubes", "random", "layers?order=random", "city?blocks=4", "sphere?n=5000",
+       {"cubes", "random", "layers?order=random", "city?blocks=4", "sphere?n=5000", "clutter?n=20&detail=3",
         "painter-midpoint", "painter-cycle", "interpenetrate", "zfight"}) {
     const Scene a = makeBuiltin(spec), b = makeBuiltin(spec);
     EXPECT_EQ(a.positions, b.positions) << spec;
@@ -218,6 +219,7 @@ TEST(Builtin, SameSpecSameScene) {
 TEST(Builtin, SeededScenesArePinned) {
   EXPECT_EQ(geometryHash(defaultScene("random")), 3501254398163597264u);
   EXPECT_EQ(geometryHash(defaultScene("city")), 3790000146779425316u);
+  EXPECT_EQ(geometryHash(makeBuiltin("clutter?n=50&detail=4")), 549254748427486164u);
   EXPECT_EQ(geometryHash(makeBuiltin("layers?order=random&n=50&seed=3")), 7258602076706724509u);
 }
 
@@ -284,7 +286,7 @@ TEST(Builtin, ParsesParameters) {
 
 TEST(Builtin, BadSpecsThrowClearErrors) {
   EXPECT_EQ(errorOf("teapot"),
-            "builtin:teapot: unknown built-in scene (known: cubes, random, sphere, layers, city, "
+            "builtin:teapot: unknown built-in scene (known: cubes, random, sphere, layers, city, clutter, "
             "painter-midpoint, painter-cycle, interpenetrate, zfight)");
   EXPECT_EQ(errorOf("random?x=1"), "builtin:random: unknown parameter 'x' (known: n, seed, size)");
   EXPECT_EQ(errorOf("cubes?seed=1"),
@@ -377,6 +379,12 @@ TEST(Builtin, ClosedMeshesWindOutwards) {
   for (const auto& mesh : city.meshes)
     if (mesh.name != "ground") {
       EXPECT_GT(signedVolume(city, mesh.firstFace, mesh.faceCount), 1) << mesh.name;
+    }
+
+  const Scene clutter = makeBuiltin("clutter?n=30&detail=3");
+  for (const auto& mesh : clutter.meshes)
+    if (mesh.name != "floor") {
+      EXPECT_GT(signedVolume(clutter, mesh.firstFace, mesh.faceCount), 0.01) << mesh.name;
     }
 
   // The sphere: every triangle faces outwards, every edge is shared by exactly two triangles in

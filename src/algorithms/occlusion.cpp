@@ -270,6 +270,7 @@ void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions
   const size_t perPass = std::max(kPassMeshes, waiting.size() / (forFrame ? kFramePassShare : kPassShare));
   uint64_t culledMeshes = 0, culledTriangles = 0;
   size_t p = 0;
+  bool noPass = false;
   for (;; ++p) {
     // This pass's meshes: the nearest perPass waiting (all of them in the last pass).
     if (p + 1 == kMaxPasses || waiting.size() <= perPass) {
@@ -281,6 +282,25 @@ void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions
       waiting.erase(waiting.begin(), waiting.begin() + perPass);
     }
     std::sort(drawn.begin(), drawn.end());
+    if (forFrame && !waiting.empty()) {
+      // For a frame, the first pass pays only when the meshes it may find hidden hold more
+      // triangles than it draws (the frame draws its meshes again): not when most meshes have
+      // no bound.
+      uint64_t drawnTriangles = 0, waitingTriangles = 0;
+      for (uint32_t m : drawn) drawnTriangles += scene.meshes[m].triangleCount;
+      for (const auto& w : waiting) waitingTriangles += scene.meshes[w.second].triangleCount;
+      if (waitingTriangles <= drawnTriangles) {
+        for (const auto& w : waiting) drawn.push_back(w.second);
+        waiting.clear();
+        std::sort(drawn.begin(), drawn.end());
+      }
+    }
+    if (forFrame && waiting.empty()) {  // nothing to test: no first pass
+      firstDrawn.swap(drawn);
+      drawn.clear();
+      noPass = true;
+      break;
+    }
     if (byMesh) transformVerticesOf(scene, drawn, vertices);
     trianglesOf(scene, drawn, ranges);
     if (forFrame) firstDrawn.swap(drawn);
@@ -317,19 +337,22 @@ void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions
     st.addTime("frontend", timer.lap());
     if (waiting.empty() || forFrame) break;
   }
-  passes = p + 1;
+  passes = noPass ? 0 : p + 1;
   if (forFrame) {
-    // What the frame draws: the first pass's meshes and those left (their vertices transformed).
+    // What the frame draws: the first pass's meshes and those left (their vertices transformed:
+    // those left, or all when there was no first pass).
     drawn.clear();
     for (const auto& w : waiting) drawn.push_back(w.second);
+    if (passes == 0) drawn.insert(drawn.end(), firstDrawn.begin(), firstDrawn.end());
     std::sort(drawn.begin(), drawn.end());
     if (byMesh) transformVerticesOf(scene, drawn, vertices);
-    drawn.insert(drawn.end(), firstDrawn.begin(), firstDrawn.end());
+    if (passes > 0) drawn.insert(drawn.end(), firstDrawn.begin(), firstDrawn.end());
     std::sort(drawn.begin(), drawn.end());
     trianglesOf(scene, drawn, culling.ranges);
     drawn.clear();
     culling.vertices = &vertices;
     culling.meshesCulled = culledMeshes;
+    culling.passes = passes + 1;  // (and the frame's)
     culling.trianglesCulled = culledTriangles;
   }
   st.occlusion_passes = passes;

@@ -67,6 +67,7 @@ struct MeshCulling {
   uint64_t trianglesOutside = 0;                   // of the meshes outside the view (culled_frustum)
   uint64_t depthTests = 0, depthWrites = 0;        // the first pass's
   uint64_t memoryBytes = 0;                        // the occlusion buffer's
+  uint64_t passes = 0;                             // tile passes: the first (if drawn) and the frame's
 };
 
 /// How many workers the binned frame's tile pass is worth (at most `threads`; small frames run

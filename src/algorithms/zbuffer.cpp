@@ -228,7 +228,7 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
     st.depth_tests += culling->depthTests;
     st.depth_writes += culling->depthWrites;
     st.culled_frustum += culling->trianglesOutside;
-    st.occlusion_passes = 2;
+    st.occlusion_passes = culling->passes;
     st.meshes_culled_occlusion = culling->meshesCulled;
     st.triangles_culled_occlusion = culling->trianglesCulled;
   }

@@ -5,6 +5,7 @@
 // Random numbers come from builtin::Random (a standard engine with our own real mapping) and
 // geometry uses only +, *, / and sqrt, so every platform builds bit-identical scenes.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 
@@ -78,14 +79,11 @@ Scene makeRandom(const Args& args) {
 // pushed onto the sphere. 20 k^2 triangles (k chosen nearest to the target n), 10 k^2 + 2
 // shared vertices: a closed, watertight mesh, wound counter-clockwise seen from outside. Each
 // icosahedron face keeps one colour, so the 20 patches show the structure.
-Scene makeSphere(const Args& args) {
-  const auto target = double(args.integer("n"));
-  int64_t k = std::max<int64_t>(1, int64_t(std::sqrt(target / 20)));
-  if (std::abs(20.0 * double((k + 1) * (k + 1)) - target) <
-          std::abs(20.0 * double(k * k) - target) &&
-      20 * (k + 1) * (k + 1) <= kMaxTriangles)
-    k += 1;
-
+namespace {
+// Adds a geodesic sphere of 20 K^2 triangles as the mesh begun last: unit sphere point p at
+// place(p), icosahedron face f's triangles in colorOf(f).
+template <class Place, class ColorOf>
+void addGeodesicSphere(Scene& scene, uint32_t K, const Place& place, const ColorOf& colorOf) {
   // The icosahedron: corners (0, +-1, +-phi) and cyclic permutations; faces counter-clockwise
   // seen from outside.
   const double phi = (1 + std::sqrt(5.0)) / 2;
@@ -97,14 +95,13 @@ Scene makeSphere(const Args& args) {
       {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
       {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
 
-  const auto K = uint32_t(k);
-  Scene scene;
   reserve(scene, size_t(20) * K * K, 3, size_t(10) * K * K + 2);
+  const auto base = uint32_t(scene.positions.size());
   const auto onSphere = [&](uint32_t a, uint32_t b, uint32_t c, uint32_t i, uint32_t j) {
     // Point (i, j) of face (a, b, c): a + (b - a) i/k + (c - a) j/k, then normalised.
     const dvec3 p = corners[a] + (corners[b] - corners[a]) * (double(i) / K) +
                     (corners[c] - corners[a]) * (double(j) / K);
-    return p / std::sqrt(glm::dot(p, p));
+    return place(p / std::sqrt(glm::dot(p, p)));
   };
 
   // Vertices: the 12 corners, then k - 1 inner points per edge (numbered from the edge's lower
@@ -122,17 +119,16 @@ Scene makeSphere(const Args& args) {
     }
   // Index of the point t steps from corner `from` towards corner `to` (0 <= t <= k).
   const auto edgePoint = [&](uint32_t from, uint32_t to, uint32_t t) -> uint32_t {
-    if (t == 0) return from;
-    if (t == K) return to;
-    const uint32_t base = 12 + uint32_t(edgeId[from][to]) * (K - 1);
-    return from < to ? base + t - 1 : base + (K - t) - 1;
+    if (t == 0) return base + from;
+    if (t == K) return base + to;
+    const uint32_t edge = base + 12 + uint32_t(edgeId[from][to]) * (K - 1);
+    return from < to ? edge + t - 1 : edge + (K - t) - 1;
   };
 
   // Per face, a triangular grid of vertex indices: row j holds points (0..k-j, j).
   std::vector<uint32_t> rowStart(K + 2);
   for (uint32_t j = 0; j <= K; ++j) rowStart[j + 1] = rowStart[j] + (K + 1 - j);
   std::vector<uint32_t> grid(rowStart[K + 1]);
-  scene.beginMesh("sphere");
   for (uint32_t f = 0; f < 20; ++f) {
     const uint32_t a = kFaces[f][0], b = kFaces[f][1], c = kFaces[f][2];
     for (uint32_t j = 0; j <= K; ++j)
@@ -149,7 +145,7 @@ Scene makeSphere(const Args& args) {
           scene.positions.push_back(onSphere(a, b, c, i, j));
         }
       }
-    const Rgba8 color = paletteColor(f);
+    const Rgba8 color = colorOf(f);
     const auto at = [&](uint32_t i, uint32_t j) { return grid[rowStart[j] + i]; };
     for (uint32_t j = 0; j < K; ++j)
       for (uint32_t i = 0; i + j < K; ++i) {
@@ -159,7 +155,58 @@ Scene makeSphere(const Args& args) {
         if (i + j + 1 < K) scene.addFace({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)}, color);
       }
   }
+}
+}  // namespace
+
+Scene makeSphere(const Args& args) {
+  const auto target = double(args.integer("n"));
+  int64_t k = std::max<int64_t>(1, int64_t(std::sqrt(target / 20)));
+  if (std::abs(20.0 * double((k + 1) * (k + 1)) - target) <
+          std::abs(20.0 * double(k * k) - target) &&
+      20 * (k + 1) * (k + 1) <= kMaxTriangles)
+    k += 1;
+  Scene scene;
+  scene.beginMesh("sphere");
+  addGeodesicSphere(scene, uint32_t(k), [](const dvec3& p) { return p; }, [](uint32_t f) { return paletteColor(f); });
   scene.camera = perspectiveCamera({1.6, 1.0, 2.4}, {0, 0, 0}, 45, 1, 5);
+  return scene;
+}
+
+// N rounded objects (ellipsoids: geodesic spheres of 20 K^2 triangles, stretched and turned at
+// random) scattered over a square floor, seen from its edge at eye level: many curved meshes
+// hiding each other, as in a cluttered room or yard. Their triangles lie on hundreds of planes,
+// so mesh culling (docs/occlusion.md) cannot bound them whole.
+Scene makeClutter(const Args& args) {
+  const auto n = uint32_t(args.integer("n"));
+  const auto K = uint32_t(args.integer("detail"));
+  Random random(uint64_t(args.integer("seed")));
+  const double side = 2.5 * std::sqrt(double(n)) + 4;
+  Scene scene;
+  scene.beginMesh("floor");
+  addPolygon(scene, {{-2, 0, -2}, {-2, 0, side + 2}, {side + 2, 0, side + 2}, {side + 2, 0, -2}},
+             Rgba8{120, 118, 110, 255});
+  for (uint32_t i = 0; i < n; ++i) {
+    // A turn from a random unit quaternion (only +, *, / and sqrt), radii 0.3-1.2.
+    double q[4], length = 0;
+    for (double& v : q) v = random.uniform(-1, 1), length += v * v;
+    length = std::sqrt(length);
+    for (double& v : q) v /= length;
+    const auto [w, x, y, z] = std::array<double, 4>{q[0], q[1], q[2], q[3]};
+    const dmat3 turn(dvec3(1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)),
+                     dvec3(2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)),
+                     dvec3(2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)));
+    const dvec3 radii(random.uniform(0.3, 1.2), random.uniform(0.3, 1.2), random.uniform(0.3, 1.2));
+    const double lift = std::max({radii.x, radii.y, radii.z}) * 0.8;
+    const dvec3 centre(random.uniform(1, side - 1), lift, random.uniform(1, side - 1));
+    const Rgba8 color = paletteColor(i, 0.5, 0.9);
+    scene.beginMesh("object" + std::to_string(i));
+    addGeodesicSphere(
+        scene, K, [&](const dvec3& p) { return centre + turn * (radii * p); },
+        [&](uint32_t f) { return shade(color, 0.75 + 0.25 * double(f % 2)); });
+  }
+  // From the middle of the near edge, at eye height, looking across the floor.
+  const dvec3 eye(side / 2, 1.2, side + 2);
+  scene.camera = perspectiveCamera(eye, eye + dvec3(0.1, -0.04, -1) * 10.0, 60, 0.25, 2 * side);
   return scene;
 }
 
