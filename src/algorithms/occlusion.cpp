@@ -79,7 +79,7 @@ struct OcclusionBuffer::Impl {
   void transformVerticesOf(const Scene& scene, const std::vector<uint32_t>& meshes, FrontEndOutput& vertices);
   // With forFrame: the first pass only, then `culling` (algo::cullMeshes).
   void drawByMeshes(const Scene& scene, const RenderOptions& opt, Stats& st, bool forFrame = false);
-  void prepare(const Camera& camera, const RenderOptions& opt);
+  RenderOptions start(const Scene& scene, const Camera& cam, const OcclusionOptions& options);
   uint64_t memoryBytes() const {
     uint64_t bytes = state.memoryBytes() + tileCapacity * sizeof(tiled::KeptTile) + state.fe.memoryBytes();
     for (size_t p = 1; p < passes; ++p) bytes += later[p - 1].memoryBytes() + later[p - 1].fe.memoryBytes();
@@ -360,9 +360,16 @@ void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions
   st.triangles_culled_occlusion = culledTriangles;
 }
 
-// A render's start: the camera, depth setup and thread count; the kept tiles sized for the image
-// (the bins' geometry, which every pass shares).
-void OcclusionBuffer::Impl::prepare(const Camera& cam, const RenderOptions& opt) {
+// A render's start: the camera, depth setup and thread count; the statistics begun; the kept
+// tiles sized for the image (the bins' geometry, which every pass shares). Returns the passes'
+// options (depth only).
+RenderOptions OcclusionBuffer::Impl::start(const Scene& scene, const Camera& cam, const OcclusionOptions& options) {
+  RenderOptions opt;
+  opt.depthFormat = options.depthFormat;
+  opt.cull = options.cull;
+  opt.threads = options.threads;
+  opt.outputs = FrameOutputs::DepthOnly;
+  stats = algo::frameStats(scene, cam);
   threads = resolveThreads(opt.threads);
   camera = cam;
   depth = DepthSetup{opt.depthFormat, cam.near, cam.far, cam.orthographic};
@@ -372,20 +379,15 @@ void OcclusionBuffer::Impl::prepare(const Camera& cam, const RenderOptions& opt)
     tiles.reset(new tiled::KeptTile[count]);  // default-initialised: see Impl::tiles
     tileCapacity = count;
   }
+  return opt;
 }
 
 const algo::MeshCulling& algo::cullMeshes(OcclusionBuffer& buffer, const Scene& scene, const Camera& camera,
                                           const RenderOptions& options) {
   OcclusionBuffer::Impl& im = *buffer.impl_;
   im.width = im.height = 0;  // holds the first pass only: not to be queried
-  RenderOptions opt;
-  opt.depthFormat = options.depthFormat;
-  opt.cull = options.cull;
-  opt.threads = options.threads;
-  opt.outputs = FrameOutputs::DepthOnly;
-  im.prepare(camera, opt);
+  const RenderOptions opt = im.start(scene, camera, {options.depthFormat, options.cull, options.threads});
   Stats& st = im.stats;
-  st = algo::frameStats(scene, camera);
   im.drawByMeshes(scene, opt, st, true);
   im.culling.depthTests = st.depth_tests;
   im.culling.depthWrites = st.depth_writes;
@@ -398,14 +400,8 @@ const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, c
   im.width = im.height = 0;  // nothing to query, until the pass below has completed
   algo::checkImage(camera, options.depthFormat);
   Timer total, timer;
-  RenderOptions opt;
-  opt.depthFormat = options.depthFormat;
-  opt.cull = options.cull;
-  opt.threads = options.threads;
-  opt.outputs = FrameOutputs::DepthOnly;
-  im.prepare(camera, opt);
+  const RenderOptions opt = im.start(scene, camera, options);
   Stats& st = im.stats;
-  st = algo::frameStats(scene, camera);
   if (algo::meshCullingApplies(scene, camera)) {
     im.drawByMeshes(scene, opt, st);
   } else {
