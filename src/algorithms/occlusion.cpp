@@ -339,14 +339,14 @@ void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions
   }
   passes = noPass ? 0 : p + 1;
   if (forFrame) {
-    // What the frame draws: the first pass's meshes and those left (their vertices transformed:
-    // those left, or all when there was no first pass).
+    // What the frame draws: the first pass's meshes and those left. The vertices of those left
+    // are transformed here (without a first pass, none left: every mesh's).
     drawn.clear();
     for (const auto& w : waiting) drawn.push_back(w.second);
-    if (passes == 0) drawn.insert(drawn.end(), firstDrawn.begin(), firstDrawn.end());
+    if (passes == 0) drawn.swap(firstDrawn);
     std::sort(drawn.begin(), drawn.end());
     if (byMesh) transformVerticesOf(scene, drawn, vertices);
-    if (passes > 0) drawn.insert(drawn.end(), firstDrawn.begin(), firstDrawn.end());
+    drawn.insert(drawn.end(), firstDrawn.begin(), firstDrawn.end());
     std::sort(drawn.begin(), drawn.end());
     trianglesOf(scene, drawn, culling.ranges);
     drawn.clear();
