@@ -9,17 +9,14 @@ namespace hsr::algo {
 namespace {
 
 // Threads pay off only with enough work: handing work to a pool thread costs about as much as
-// the kernel spends on ~4000 small binned triangles; clearing and resolving a tile counts as 40
-// of them. (Measured on builtin scenes; a thread more on a small frame is slower, a thread less
-// on a big one wastes a core.)
+// the kernel spends on ~4000 small binned triangles. A tile (cleared and resolved, or loaded,
+// drawn onto and stored again) justifies a worker of its own: with the pool's workers spinning
+// between jobs, two workers drew frames of 20-80 tiles 1.3-1.8x faster than one (cubes, layers,
+// a small city and random triangles at 640x480 and 320x240, frames with ids and depth only; the
+// city's first pass of mesh culling 1.10x), where a tile counted as 40 triangles had left them
+// on one. (Measured on builtin scenes with build/bench/hsr_ab_env, twenty-eighth session.)
 constexpr size_t kWorkPerThread = 4000;
-constexpr size_t kWorkPerTile = 40;
-// A tile of a later pass (the occlusion buffer's mesh culling) is loaded, drawn onto and stored
-// again, and what it draws is mostly what shows, over many pixels: the city's second pass (25
-// tiles, 889 pairs) took 0.2 ms on one thread; on two, the frame 0.89 ms instead of 1.00.
-// The same weight for a tile of a frame whose hidden meshes were dropped (city at 640x480: 1.51x
-// faster than with 40, which left the frame on one thread).
-constexpr size_t kWorkPerKeptTile = 400;
+constexpr size_t kWorkPerTile = kWorkPerThread;
 
 }  // namespace
 
@@ -61,7 +58,7 @@ void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt
   state.bins.sceneTriangles = scene.triangles.data();
 }
 
-int prepareTilePass(TiledState& state, int threads, std::vector<uint32_t>* touched, bool meshesCulled) {
+int prepareTilePass(TiledState& state, int threads, std::vector<uint32_t>* touched) {
   const tiled::Bins& bins = state.bins;
   const size_t tiles = size_t(bins.tileCount());
   // Every worker's lists sized for the fullest tile (which worker meets which tile varies from
@@ -77,7 +74,7 @@ int prepareTilePass(TiledState& state, int threads, std::vector<uint32_t>* touch
   }
   // Every binned pair and deferred face, chunk by chunk (not tile by tile: that is a pass over
   // every chunk's lists per tile, on one thread).
-  size_t work = touched ? touched->size() * kWorkPerKeptTile : tiles * (meshesCulled ? kWorkPerKeptTile : kWorkPerTile);
+  size_t work = (touched ? touched->size() : tiles) * kWorkPerTile;
   for (size_t c = 0; c < bins.chunkCount; ++c)
     work += bins.chunks[c].items.size() + bins.late[c].items.size() + bins.clusters[c].items.size();
   const int workers = int(std::clamp<size_t>(work / kWorkPerThread, 1, size_t(threads)));

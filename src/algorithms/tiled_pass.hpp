@@ -70,13 +70,12 @@ struct MeshCulling {
   uint64_t passes = 0;                             // tile passes: the first (if drawn) and the frame's
 };
 
-/// How many workers the binned frame's tile pass is worth (at most `threads`; small frames run
-/// on fewer, as handing work to a pool thread costs about as much as the kernel spends on ~4000
-/// small triangles), with one visit list each, and the per-tile counters cleared.
+/// How many workers the binned frame's tile pass is worth (at most `threads`; a frame of one
+/// tile with few triangles runs on one, as handing work to a pool thread costs about as much as
+/// the kernel spends on ~4000 small triangles; each tile is worth a worker), with one visit list
+/// each, and the per-tile counters cleared.
 /// With `touched`: a pass over only the tiles that have items, listed there in order.
-/// `meshesCulled`: a frame whose hidden meshes were dropped (MeshCulling): what is binned mostly
-/// shows, over many pixels, so each tile weighs as a kept tile does.
-int prepareTilePass(TiledState& state, int threads, std::vector<uint32_t>* touched = nullptr, bool meshesCulled = false);
+int prepareTilePass(TiledState& state, int threads, std::vector<uint32_t>* touched = nullptr);
 
 /// Hands the tile pass's `units` to its `workers` (state.tileWork, parts [0, workers)): unit u is
 /// the tiles [tilesOf(u).first, + tilesOf(u).second) of one tile row; each goes first to the

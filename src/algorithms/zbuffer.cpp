@@ -12,6 +12,7 @@
 //    triangle in front of all they hold, and colour, ids and depth resolved per tile into a
 //    frame that is never cleared separately. Bit-identical results, with less work: its
 //    depth_tests and depth_writes count what it did (fewer than the reference's).
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -110,11 +111,11 @@ constexpr int kResolveBand = 8;
 // tiled::resolveTile). Each tile has one owner, so no locks; counters are kept per tile and
 // summed in tile order.
 void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const TriangleShader& shade, Frame& frame,
-               TiledState& state, Counters& n, tiled::RasterCounters& total, bool meshesCulled) {
+               TiledState& state, Counters& n, tiled::RasterCounters& total) {
   const tiled::Bins& bins = state.bins;
   const int segmentsX = (bins.tilesX + kSegmentTiles - 1) / kSegmentTiles;
   const size_t segments = size_t(segmentsX) * size_t(bins.tilesY);
-  const int workers = prepareTilePass(state, resolveThreads(opt.threads), nullptr, meshesCulled);
+  const int workers = std::min(prepareTilePass(state, resolveThreads(opt.threads)), int(segments));
   if (state.scratch.size() < size_t(workers) * kSegmentTiles) state.scratch.resize(size_t(workers) * kSegmentTiles);
   const bool ids = opt.outputs != FrameOutputs::DepthOnly;
   assignUnits(state, workers, segments, [&](size_t seg) {
@@ -198,7 +199,7 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
       setUpAndBin(scene, cam, opt, depth, state);
     }
     st.addTime("frontend", timer.lap());
-    drawTiled(opt, depth, shade, frame, state, n, tiledCounters, culling != nullptr);
+    drawTiled(opt, depth, shade, frame, state, n, tiledCounters);
     st.addTime("raster", timer.lap());
     bufferBytes = state.memoryBytes();
     if (culling) bufferBytes += culling->memoryBytes;
