@@ -22,5 +22,9 @@ void checkImage(const Camera& camera, DepthFormat format);
 /// meshes, a perspective camera, HSR_MESH_CULLING not off). zbuffer's depth-only frames of such
 /// scenes go through an occlusion buffer and its depthImage (the same bits).
 bool meshCullingApplies(const Scene& scene, const Camera& camera);
+/// Whether a frame with ids of this scene may gain from mesh culling's first pass (algo::cullMeshes):
+/// meshCullingApplies, and the scene holds enough triangles for the pass over every tile of the
+/// image (occlusion.cpp, kFrameWaitingPerTile); cullMeshes then decides by the meshes it can test.
+bool meshCullingPaysForFrame(const Scene& scene, const Camera& camera);
 
 }  // namespace hsr::algo

@@ -175,10 +175,12 @@ void zbuffer(const Scene& scene, const Camera& cam, const RenderOptions& opt, Fr
   // the kept tiles' extra pass cost more than culling saved (depth only 0.89x), hence the
   // triangle count.
   constexpr size_t kByMeshesTriangles = 8192;
-  const bool byMeshes = isTiled && scene.triangles.size() >= kByMeshesTriangles && meshCullingApplies(scene, cam);
+  const bool depthOnly = opt.outputs == FrameOutputs::DepthOnly;
+  const bool byMeshes = isTiled && scene.triangles.size() >= kByMeshesTriangles &&
+                        (depthOnly ? meshCullingApplies(scene, cam) : meshCullingPaysForFrame(scene, cam));
   thread_local OcclusionBuffer callerOccluders;
   OcclusionBuffer& occluders = callerOccluders;
-  if (byMeshes && opt.outputs == FrameOutputs::DepthOnly) {
+  if (byMeshes && depthOnly) {
     occluders.render(scene, cam, {opt.depthFormat, opt.cull, opt.threads});
     timer.lap();
     occluders.depthImage(frame);  // (its statistics: the buffer's, and covered_pixels)
