@@ -52,11 +52,25 @@ void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 namespace hsr {
 namespace {
 
+// The scene's camera (or a framing of it) at 640x360.
+Camera cameraOf(const Scene& scene) {
+  return resolveCamera(scene.camera ? *scene.camera : frameBounds(scene.bounds()), 640, 360, scene.bounds());
+}
+
+// Runs f with the allocation counters reset and counting.
+template <class F>
+void counted(F&& f) {
+  allocations = 0;
+  largest = 0;
+  counting = true;
+  f();
+  counting = false;
+}
+
 TEST(Memory, WarmTiledFramesAllocateNoBuffers) {
   for (const char* name : {"builtin:sphere?n=200000", "builtin:city", "builtin:layers?n=8"}) {
     const Scene scene = loadScene(name);
-    const Camera cam = resolveCamera(scene.camera ? *scene.camera : frameBounds(scene.bounds()), 640, 360,
-                                     scene.bounds());
+    const Camera cam = cameraOf(scene);
     for (FrameOutputs outputs : {FrameOutputs::All, FrameOutputs::DepthOnly}) {
       RenderOptions o;
       o.threads = 2;
@@ -64,11 +78,7 @@ TEST(Memory, WarmTiledFramesAllocateNoBuffers) {
       Frame frame;
       render(scene, cam, o, frame);  // warm-up: buffers grow to this scene's size
       render(scene, cam, o, frame);
-      allocations = 0;
-      largest = 0;
-      counting = true;
-      render(scene, cam, o, frame);
-      counting = false;
+      counted([&] { render(scene, cam, o, frame); });
       EXPECT_LE(allocations.load(), 8u) << name;  // 4 at the time of writing, none above 160 bytes
       EXPECT_LE(largest.load(), 1024u) << name << ": a buffer was allocated during a warm frame";
       EXPECT_GT(frame.stats.covered_pixels, 1000u) << name;
@@ -81,20 +91,16 @@ TEST(Memory, WarmTiledFramesAllocateNoBuffers) {
 TEST(Memory, WarmOcclusionRendersAllocateNoBuffers) {
   for (const char* name : {"builtin:city", "builtin:layers?n=64", "builtin:cubes"}) {
     const Scene scene = loadScene(name);
-    const Camera cam = resolveCamera(scene.camera ? *scene.camera : frameBounds(scene.bounds()), 640, 360,
-                                     scene.bounds());
+    const Camera cam = cameraOf(scene);
     for (Cull cull : {Cull::None, Cull::Back}) {
       OcclusionBuffer buffer;
       buffer.render(scene, cam, {DepthFormat{}, cull, 2});  // warm-up
       buffer.render(scene, cam, {DepthFormat{}, cull, 2});
-      allocations = 0;
-      largest = 0;
-      counting = true;
-      const Stats& st = buffer.render(scene, cam, {DepthFormat{}, cull, 2});
-      counting = false;
+      const Stats* st = nullptr;
+      counted([&] { st = &buffer.render(scene, cam, {DepthFormat{}, cull, 2}); });
       EXPECT_LE(allocations.load(), 8u) << name;
       EXPECT_LE(largest.load(), 1024u) << name << ": a buffer was allocated during a warm render";
-      if (std::string(name) == "builtin:city") EXPECT_GT(st.meshes_culled_occlusion.value_or(0), 500u);
+      if (std::string(name) == "builtin:city") EXPECT_GT(st->meshes_culled_occlusion.value_or(0), 500u);
     }
   }
 }
