@@ -1121,6 +1121,13 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
     return 0;
   }
   HWY_ALIGN uint32_t rows[4][kTileSize];  // a row of the tile per output, then streamed (core/stream-inl.h)
+  // The triangle of the uniform lanes last met (a plane tile's every run, a uniform block's
+  // runs): its record read and its values broadcast once, not per run of lanes; P's and Q's b Y
+  // once per row (the products EyeDepthRow forms: the same bits).
+  uint64_t uniformKey = 0;
+  double numB = 0, denB = 0, uniformY = -1;
+  V numA = hn::Zero(d), numC = numA, denA = numA, denC = numA, numBY = numA, denBY = numA;
+  hn::Vec<decltype(du32)> uniformFace = noId, uniformTriangle = noId, uniformColor = noId;
   for (int y = rowBegin; y < std::min(rowEnd, h); ++y) {
     const double Y = double(y0 + y) + 0.5;
     for (size_t k = 0; k < size_t(w); k += N) {
@@ -1152,12 +1159,27 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
         if constexpr (kColor) hn::Store(hn::Set(du32, backgroundBits), du32, colorOut);
         continue;
       }
-      const SetupTriangle& t = bins.triangle(key);
+      if (key != uniformKey) {
+        const SetupTriangle& t = bins.triangle(key);
+        uniformKey = key;
+        numA = hn::Set(d, t.depthNum.a), numC = hn::Set(d, t.depthNum.c), numB = t.depthNum.b;
+        denA = hn::Set(d, t.depthDen.a), denC = hn::Set(d, t.depthDen.c), denB = t.depthDen.b;
+        uniformFace = hn::Set(du32, Bits32(int32_t(t.face)));
+        uniformTriangle = hn::Set(du32, Bits32(int32_t(t.triangle)));
+        if constexpr (kColor) uniformColor = hn::Set(du32, colorOf(key, t));
+        uniformY = -1;
+      }
+      if (Y != uniformY) {
+        numBY = hn::Set(d, numB * Y), denBY = hn::Set(d, denB * Y);
+        uniformY = Y;
+      }
       const V X = hn::Iota(d, double(x0 + int(k)) + 0.5);
-      hn::Store(hn::BitCast(du32, hn::DemoteTo(df, EyeDepthRow(t, X, Y))), du32, depthOut);
-      hn::Store(hn::Set(du32, Bits32(int32_t(t.face))), du32, faceOut);
-      hn::Store(hn::Set(du32, Bits32(int32_t(t.triangle))), du32, triangleOut);
-      if constexpr (kColor) hn::Store(hn::Set(du32, colorOf(key, t)), du32, colorOut);
+      const V num = hn::Add(hn::Add(hn::Mul(numA, X), numBY), numC);  // EyeDepthRow's operations
+      const V den = hn::Add(hn::Add(hn::Mul(denA, X), denBY), denC);
+      hn::Store(hn::BitCast(du32, hn::DemoteTo(df, hn::Div(num, den))), du32, depthOut);
+      hn::Store(uniformFace, du32, faceOut);
+      hn::Store(uniformTriangle, du32, triangleOut);
+      if constexpr (kColor) hn::Store(uniformColor, du32, colorOut);
       covered += count;
     }
     const size_t at = frame.index(x0, y0 + y);
