@@ -196,13 +196,20 @@ HWY_INLINE TileRect RectOf(const TileJob& job) {
 
 // Eye depths of triangle t at the pixel centres X (lanes) of the row whose centre is Y, with the
 // operations of SetupTriangle::eyeDepth (as the reference resolves them).
+// The same from the planes' coefficients broadcast: a, b Y and c of the numerator's and the
+// denominator's plane.
+struct EyePlanesV {
+  V numA, numBY, numC, denA, denBY, denC;
+};
+HWY_INLINE V EyeDepthAt(const EyePlanesV& e, V X) {
+  return hn::Div(hn::Add(hn::Add(hn::Mul(e.numA, X), e.numBY), e.numC),
+                 hn::Add(hn::Add(hn::Mul(e.denA, X), e.denBY), e.denC));
+}
 HWY_INLINE V EyeDepthRow(const SetupTriangle& t, V X, double Y) {
   const D d;
-  const V num = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthNum.a), X), hn::Set(d, t.depthNum.b * Y)),
-                        hn::Set(d, t.depthNum.c));
-  const V den = hn::Add(hn::Add(hn::Mul(hn::Set(d, t.depthDen.a), X), hn::Set(d, t.depthDen.b * Y)),
-                        hn::Set(d, t.depthDen.c));
-  return hn::Div(num, den);
+  return EyeDepthAt({hn::Set(d, t.depthNum.a), hn::Set(d, t.depthNum.b * Y), hn::Set(d, t.depthNum.c),
+                     hn::Set(d, t.depthDen.a), hn::Set(d, t.depthDen.b * Y), hn::Set(d, t.depthDen.c)},
+                    X);
 }
 
 // The tile's part of the image and the constants of its depth format.
@@ -1122,11 +1129,11 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
   }
   HWY_ALIGN uint32_t rows[4][kTileSize];  // a row of the tile per output, then streamed (core/stream-inl.h)
   // The triangle of the uniform lanes last met (a plane tile's every run, a uniform block's
-  // runs): its record read and its values broadcast once, not per run of lanes; P's and Q's b Y
+  // runs): its record read and its values broadcast once, not per run of lanes; the planes' b Y
   // once per row (the products EyeDepthRow forms: the same bits).
   uint64_t uniformKey = 0;
   double numB = 0, denB = 0, uniformY = -1;
-  V numA = hn::Zero(d), numC = numA, denA = numA, denC = numA, numBY = numA, denBY = numA;
+  EyePlanesV planes{hn::Zero(d), hn::Zero(d), hn::Zero(d), hn::Zero(d), hn::Zero(d), hn::Zero(d)};
   hn::Vec<decltype(du32)> uniformFace = noId, uniformTriangle = noId, uniformColor = noId;
   for (int y = rowBegin; y < std::min(rowEnd, h); ++y) {
     const double Y = double(y0 + y) + 0.5;
@@ -1162,21 +1169,19 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
       if (key != uniformKey) {
         const SetupTriangle& t = bins.triangle(key);
         uniformKey = key;
-        numA = hn::Set(d, t.depthNum.a), numC = hn::Set(d, t.depthNum.c), numB = t.depthNum.b;
-        denA = hn::Set(d, t.depthDen.a), denC = hn::Set(d, t.depthDen.c), denB = t.depthDen.b;
+        planes.numA = hn::Set(d, t.depthNum.a), planes.numC = hn::Set(d, t.depthNum.c), numB = t.depthNum.b;
+        planes.denA = hn::Set(d, t.depthDen.a), planes.denC = hn::Set(d, t.depthDen.c), denB = t.depthDen.b;
         uniformFace = hn::Set(du32, Bits32(int32_t(t.face)));
         uniformTriangle = hn::Set(du32, Bits32(int32_t(t.triangle)));
         if constexpr (kColor) uniformColor = hn::Set(du32, colorOf(key, t));
         uniformY = -1;
       }
       if (Y != uniformY) {
-        numBY = hn::Set(d, numB * Y), denBY = hn::Set(d, denB * Y);
+        planes.numBY = hn::Set(d, numB * Y), planes.denBY = hn::Set(d, denB * Y);
         uniformY = Y;
       }
       const V X = hn::Iota(d, double(x0 + int(k)) + 0.5);
-      const V num = hn::Add(hn::Add(hn::Mul(numA, X), numBY), numC);  // EyeDepthRow's operations
-      const V den = hn::Add(hn::Add(hn::Mul(denA, X), denBY), denC);
-      hn::Store(hn::BitCast(du32, hn::DemoteTo(df, hn::Div(num, den))), du32, depthOut);
+      hn::Store(hn::BitCast(du32, hn::DemoteTo(df, EyeDepthAt(planes, X))), du32, depthOut);
       hn::Store(uniformFace, du32, faceOut);
       hn::Store(uniformTriangle, du32, triangleOut);
       if constexpr (kColor) hn::Store(uniformColor, du32, colorOut);
