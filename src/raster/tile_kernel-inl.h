@@ -194,10 +194,9 @@ HWY_INLINE TileRect RectOf(const TileJob& job) {
   return {x0, y0, std::min(kTileSize, bins.width - x0), std::min(kTileSize, bins.height - y0)};
 }
 
-// Eye depths of triangle t at the pixel centres X (lanes) of the row whose centre is Y, with the
-// operations of SetupTriangle::eyeDepth (as the reference resolves them).
-// The same from the planes' coefficients broadcast: a, b Y and c of the numerator's and the
-// denominator's plane.
+// Eye depths at the pixel centres X (lanes) from a triangle's planes broadcast: a, b Y and c of
+// the numerator's and the denominator's plane (Y the row's centre), with the operations of
+// SetupTriangle::eyeDepth (as the reference resolves them).
 struct EyePlanesV {
   V numA, numBY, numC, denA, denBY, denC;
 };
@@ -205,6 +204,7 @@ HWY_INLINE V EyeDepthAt(const EyePlanesV& e, V X) {
   return hn::Div(hn::Add(hn::Add(hn::Mul(e.numA, X), e.numBY), e.numC),
                  hn::Add(hn::Add(hn::Mul(e.denA, X), e.denBY), e.denC));
 }
+// The same for triangle t in the row whose centre is Y.
 HWY_INLINE V EyeDepthRow(const SetupTriangle& t, V X, double Y) {
   const D d;
   return EyeDepthAt({hn::Set(d, t.depthNum.a), hn::Set(d, t.depthNum.b * Y), hn::Set(d, t.depthNum.c),
