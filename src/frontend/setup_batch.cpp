@@ -379,7 +379,7 @@ size_t SetupLanes(const ProjectedVertex* projected, const uint32_t* const* verte
     // (One store per field: a braced list of the vectors would be copied whole first.)
     hn::Store(bx0, d, lane[6]), hn::Store(bx1, d, lane[7]), hn::Store(by0, d, lane[8]), hn::Store(by1, d, lane[9]);
     hn::Store(nearestV, d, lane[16]);
-#if !(HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3)  // (the AVX-512 records are built from the vectors)
+#if !(HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2)  // (the AVX2 and AVX-512 records are built from the vectors)
     for (int k = 0; k < 3; ++k) {
       hn::Store(X[k], d, lane[k]);
       hn::Store(Y[k], d, lane[3 + k]);
@@ -411,6 +411,12 @@ size_t SetupLanes(const ProjectedVertex* projected, const uint32_t* const* verte
       f.nearest = lane[16][j];
     }
     hn::StoreMaskBits(d, hn::AndNot(defer, survivors), survivorBits);
+    // The record's 12 eight-byte words, as the AVX2 and AVX-512 paths below build them.
+    static_assert(offsetof(SetupTriangle, minX) == 24 && offsetof(SetupTriangle, depthNum) == 32 &&
+                  offsetof(SetupTriangle, depthDen) == 56 && offsetof(SetupTriangle, triangle) == 80 &&
+                  offsetof(SetupTriangle, face) == 84 && offsetof(SetupTriangle, frontFacing) == 88 &&
+                  offsetof(SetupTriangle, coverage) == 90 && offsetof(SetupTriangle, color) == 92,
+                  "the words below are the record's layout");
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
     // 8 lanes (AVX-512): each record's 12 eight-byte words built a vector per word (lane j:
     // triangle j's), the vectors transposed, and each survivor's record stored with two stores
@@ -442,11 +448,6 @@ size_t SetupLanes(const ProjectedVertex* projected, const uint32_t* const* verte
       // frontFacing (byte 88: 1 or 0), a zero byte, coverage (bytes 90-91), colour (92-95: set by the caller)
       const auto flags = hn::Or(hn::IfThenElseZero(hn::RebindMask(du, front), hn::Set(du, 1)),
                                 hn::ShiftLeft<16>(toInt(coverage)));
-      static_assert(offsetof(SetupTriangle, minX) == 24 && offsetof(SetupTriangle, depthNum) == 32 &&
-                    offsetof(SetupTriangle, depthDen) == 56 && offsetof(SetupTriangle, triangle) == 80 &&
-                    offsetof(SetupTriangle, face) == 84 && offsetof(SetupTriangle, frontFacing) == 88 &&
-                    offsetof(SetupTriangle, coverage) == 90 && offsetof(SetupTriangle, color) == 92,
-                    "the words below are the record's layout");
       __m512i r[8] = {q0.raw, q1.raw, q2.raw, q3.raw, hn::BitCast(du, na).raw, hn::BitCast(du, nb).raw,
                       hn::BitCast(du, nc).raw, hn::BitCast(du, da).raw};
       // 8x8 transpose of 64-bit words: r[j] becomes words 0-7 of triangle j's record.
@@ -483,6 +484,63 @@ size_t SetupLanes(const ProjectedVertex* projected, const uint32_t* const* verte
         char* at = reinterpret_cast<char*>(out + written++);
         _mm512_storeu_si512(at, row[j]);
         _mm256_storeu_si256(reinterpret_cast<__m256i*>(at + 64), tail[j]);
+      }
+    }
+#elif HWY_ARCH_X86 && HWY_TARGET == HWY_AVX2
+    // 4 lanes (AVX2): the same 12 words per record as above, built as three 4x4 transposes of
+    // 64-bit words (words 0-3, 4-7, 8-11), each survivor's record stored with three 32-byte
+    // stores (instead of 24 fields read from the lane arrays and written one by one).
+    {
+      // (Every value converted is an integer well inside int32: exact. Lane j of a 64-bit word
+      // pair (a, b) holds a in its low half.)
+      auto pairs = [](__m128i a, __m128i b) {
+        return _mm256_set_m128i(_mm_unpackhi_epi32(a, b), _mm_unpacklo_epi32(a, b));
+      };
+      auto int32 = [](V v) { return _mm256_cvtpd_epi32(v.raw); };
+      const __m128i x0 = int32(X[0]), x1 = int32(X[1]), x2 = int32(X[2]);
+      const __m128i y0 = int32(Y[0]), y1 = int32(Y[1]), y2 = int32(Y[2]);
+      // The box: (minX, minY) and (maxX, maxY) as 16-bit pairs (0 <= each < 2^15 for a survivor).
+      const __m128i minXY = _mm_unpacklo_epi16(_mm_packs_epi32(int32(bx0), int32(bx0)),
+                                               _mm_packs_epi32(int32(by0), int32(by0)));
+      const __m128i maxXY = _mm_unpacklo_epi16(_mm_packs_epi32(int32(bx1), int32(bx1)),
+                                               _mm_packs_epi32(int32(by1), int32(by1)));
+      __m128i tris, faces;
+      if (lanes == N) {
+        tris = _mm_loadu_si128(reinterpret_cast<const __m128i*>(triIndex + first));
+        faces = _mm_loadu_si128(reinterpret_cast<const __m128i*>(face + first));
+      } else {  // (the lists end with the batch)
+        alignas(16) uint32_t tri4[4], face4[4];
+        for (size_t j = 0; j < 4; ++j) {
+          tri4[j] = triIndex[first + std::min(j, lanes - 1)];
+          face4[j] = face[first + std::min(j, lanes - 1)];
+        }
+        tris = _mm_load_si128(reinterpret_cast<const __m128i*>(tri4));
+        faces = _mm_load_si128(reinterpret_cast<const __m128i*>(face4));
+      }
+      // frontFacing (byte 88: 1 or 0), a zero byte, coverage (bytes 90-91), colour (92-95: set
+      // by the caller).
+      const __m128i flags32 = _mm_or_si128(int32(hn::IfThenElseZero(front, hn::Set(d, 1.0))),
+                                           _mm_slli_epi32(int32(coverage), 16));
+      auto asInt = [](V v) { return _mm256_castpd_si256(v.raw); };
+      const __m256i word[12] = {pairs(x0, x1), pairs(x2, y0), pairs(y1, y2), pairs(minXY, maxXY),
+                                asInt(na),     asInt(nb),     asInt(nc),     asInt(da),
+                                asInt(db),     asInt(dc),     pairs(tris, faces), _mm256_cvtepu32_epi64(flags32)};
+      // Three 4x4 transposes: row[g][j] holds words 4 g to 4 g + 3 of lane j's record.
+      __m256i row[3][4];
+      for (int g = 0; g < 3; ++g) {
+        const __m256i* q = word + 4 * g;
+        const __m256i t0 = _mm256_unpacklo_epi64(q[0], q[1]), t1 = _mm256_unpackhi_epi64(q[0], q[1]);
+        const __m256i t2 = _mm256_unpacklo_epi64(q[2], q[3]), t3 = _mm256_unpackhi_epi64(q[2], q[3]);
+        row[g][0] = _mm256_permute2x128_si256(t0, t2, 0x20);
+        row[g][1] = _mm256_permute2x128_si256(t1, t3, 0x20);
+        row[g][2] = _mm256_permute2x128_si256(t0, t2, 0x31);
+        row[g][3] = _mm256_permute2x128_si256(t1, t3, 0x31);
+      }
+      for (unsigned bits = survivorBits[0]; bits; bits &= bits - 1) {
+        const size_t j = hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
+        if (depth) nearest[written] = lane[16][j];
+        __m256i* at = reinterpret_cast<__m256i*>(out + written++);
+        for (int g = 0; g < 3; ++g) _mm256_storeu_si256(at + g, row[g][j]);
       }
     }
 #else
