@@ -496,8 +496,11 @@ void RasterizeTileT(const TileJob& job) {
         if constexpr (kIds) s.triangle[at] = key;
         const int b = (y / kBlockSize) * kBlocksX + x / kBlockSize;
         dirtyBlocks |= uint64_t(1) << b;
-        if (storedNearer<M>(z, s.blockNear[b])) s.blockNear[b] = z;
-        if (storedNearer<M>(z, s.tileNear)) s.tileNear = z;
+        // The nearer value stored without a branch (a data-dependent one per bound: sphere
+        // --depth-only --cull-back 0.988x the time, its frame with ids 0.980x; city, random
+        // and clutter unchanged).
+        s.blockNear[b] = kGreater ? std::max(z, s.blockNear[b]) : std::min(z, s.blockNear[b]);
+        s.tileNear = kGreater ? std::max(z, s.tileNear) : std::min(z, s.tileNear);
       }
     };
     // A small triangle's box in the tile (tile-local, inclusive): whether it is behind everything
