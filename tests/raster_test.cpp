@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstring>
 #include <hwy/targets.h>
+#include <limits>
 #include <map>
 #include <random>
 
@@ -477,6 +478,62 @@ TEST(Raster, VertexPassEqualsScalarOnEveryInstructionSet) {
   hwy::SetSupportedTargetsForTest(0);
   EXPECT_GT(inside, 200);  // some of each kind
   EXPECT_LT(inside, 1003);
+}
+
+// boxCornersInView (SIMD) decides and measures a box's eight corners as transformVertex and the
+// clipping planes do, one corner at a time: inside every plane by more than the margin, and then
+// bit for bit the extremes of w -+ room and of hx (1 / w), hy (1 / w) — on every instruction set,
+// for boxes wholly in view, crossing a plane, behind the camera, flat and a point.
+TEST(Raster, BoxCornersInViewEqualsScalarOnEveryInstructionSet) {
+  std::mt19937_64 rng(80);
+  std::uniform_real_distribution<double> centre(-12, 12), half(0, 6);
+  CameraSpec spec;
+  spec.eye = {3, 4, 40};
+  spec.target = {0, 0, 0};
+  spec.near = 5;
+  spec.far = 60;
+  const Camera cam = resolveCamera(spec, 640, 480, Bounds3{});
+  const dmat4 M = cam.pixelFromCamera * cam.cameraFromWorld;
+  std::vector<Bounds3> boxes(600);
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    dvec3 c{centre(rng), centre(rng), 3 * centre(rng)}, r{half(rng), half(rng), half(rng)};
+    if (i % 5 == 1) r.z = 0;                  // flat
+    if (i % 7 == 2) r = dvec3(0.0);           // a point
+    if (i % 11 == 3) c.z = 38;                // at the near plane, or behind the eye
+    boxes[i] = {c - r, c + r};
+  }
+  const double margin = 1e-3, room = 1e-9;
+  int inView = 0;
+  const std::vector<int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  for (int64_t target : targets) {
+    hwy::SetSupportedTargetsForTest(target);
+    for (size_t i = 0; i < boxes.size(); ++i) {
+      const Bounds3& b = boxes[i];
+      bool inside = true;
+      const double inf = std::numeric_limits<double>::infinity();
+      double want[6] = {inf, -inf, inf, inf, -inf, -inf};
+      for (int c = 0; c < 8; ++c) {
+        const HVertex h = transformVertex({c & 1 ? b.hi.x : b.lo.x, c & 2 ? b.hi.y : b.lo.y, c & 4 ? b.hi.z : b.lo.z}, M);
+        const double g = kGuardBandPixels;
+        inside &= h.d - cam.near > margin && cam.far - h.d > margin && h.hx - -g * h.w > margin &&
+                  (cam.width + g) * h.w - h.hx > margin && h.hy - -g * h.w > margin &&
+                  (cam.height + g) * h.w - h.hy > margin;
+        const double inverse = 1 / h.w;
+        want[0] = std::min(want[0], h.w - room), want[1] = std::max(want[1], h.w + room);
+        want[2] = std::min(want[2], h.hx * inverse), want[3] = std::min(want[3], h.hy * inverse);
+        want[4] = std::max(want[4], h.hx * inverse), want[5] = std::max(want[5], h.hy * inverse);
+      }
+      double got[6];
+      const std::string what = std::string(hwy::TargetName(target)) + " box " + std::to_string(i);
+      ASSERT_EQ(boxCornersInView(b, M, cam, margin, room, got), inside) << what;
+      if (!inside) continue;
+      inView += target == targets.front();
+      for (int k = 0; k < 6; ++k) EXPECT_EQ(got[k], want[k]) << what << " extent " << k;
+    }
+  }
+  hwy::SetSupportedTargetsForTest(0);
+  EXPECT_GT(inView, 100);  // some of each kind
+  EXPECT_LT(inView, 550);
 }
 
 // The nearest bounds the batched set-up computes are bit for bit nearestStored() of the scalar

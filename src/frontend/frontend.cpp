@@ -234,8 +234,6 @@ struct BoxInView {
   double x0, y0, x1, y1;
 };
 bool boxInView(const Bounds3& box, const Camera& cam, const dmat4& M, BoxInView& out) {
-  out.zMin = out.x0 = out.y0 = std::numeric_limits<double>::infinity();
-  out.zMax = out.x1 = out.y1 = -out.zMin;
   const double planeScale = 2 * kGuardBandPixels + cam.width + cam.height + 1;
   // The magnitudes of the corners' terms, bounded once for the box: |M[j][r] p_j| at the box's
   // largest |p_j| (at least every corner's own: the margins below only grow).
@@ -245,29 +243,15 @@ bool boxInView(const Bounds3& box, const Camera& cam, const dmat4& M, BoxInView&
   };
   const double wTerms = terms(3);
   const double magnitude = terms(0) + terms(1) + terms(2) + wTerms * planeScale + cam.near + cam.far;
-  const double margin = 1e-9 * magnitude;
-  // The corners' homogeneous coordinates as transformVertex computes them (the same products,
-  // added in the same order), each product once: corner c takes lo or hi by its bits 1, 2, 4.
-  double term[3][4][2];  // [axis][row][lo, hi]
-  for (int r = 0; r < 4; ++r)
-    for (int j = 0; j < 3; ++j) term[j][r][0] = M[j][r] * box.lo[j], term[j][r][1] = M[j][r] * box.hi[j];
-  HVertex corner[8];
-  bool inside = true;
-  for (int c = 0; c < 8; ++c) {
-    auto row = [&](int r) { return ((term[0][r][c & 1] + term[1][r][c >> 1 & 1]) + term[2][r][c >> 2 & 1]) + M[3][r]; };
-    corner[c] = {row(0), row(1), row(2), row(3)};
-    for (int plane = 0; plane < kPlanes; ++plane) inside &= planeDistance(corner[c], plane, cam) > margin;
-    if (!inside) return false;
-  }
-  for (const HVertex& h : corner) {
-    out.zMin = std::min(out.zMin, h.w - 1e-12 * wTerms);
-    out.zMax = std::max(out.zMax, h.w + 1e-12 * wTerms);
-    // (One division a corner, not two: the reciprocal's rounding, ~1e-16 relative, is far
-    // within the room deferCluster leaves, ~1e-12.)
-    const double inverse = 1 / h.w, sx = h.hx * inverse, sy = h.hy * inverse;
-    out.x0 = std::min(out.x0, sx), out.x1 = std::max(out.x1, sx);
-    out.y0 = std::min(out.y0, sy), out.y1 = std::max(out.y1, sy);
-  }
+  // The corners' homogeneous coordinates as transformVertex computes them, each inside every
+  // clipping plane by the margin; their least and greatest eye depth, widened for rounding (one
+  // division a corner, not two: the reciprocal's rounding, ~1e-16 relative, is far within the
+  // room deferCluster leaves, ~1e-12), and pixel positions. (With SIMD, four or eight corners at
+  // a time: sphere --depth-only --cull-back 0.984x the time, --depth-only 0.990x.)
+  double extent[6];
+  if (!boxCornersInView(box, M, cam, 1e-9 * magnitude, 1e-12 * wTerms, extent)) return false;
+  out.zMin = extent[0], out.zMax = extent[1];
+  out.x0 = extent[2], out.y0 = extent[3], out.x1 = extent[4], out.y1 = extent[5];
   return out.zMin > 0;
 }
 

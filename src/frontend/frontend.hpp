@@ -258,6 +258,14 @@ uint32_t clipOutcode(const HVertex& v, const Camera& cam);
 void transformVertices(const dvec3* positions, size_t count, const dmat4& M, const Camera& cam, uint8_t* outcodes,
                        ProjectedVertex* projected);
 
+/// The corners of `box` taken to homogeneous pixel coordinates by M (transformVertex's products
+/// and sums, in its order), with SIMD (frontend/setup_batch.cpp): false unless every corner lies
+/// inside each clipping half-space by more than `margin`; then `extent` holds the least w - wRoom
+/// and the greatest w + wRoom, then the least and greatest pixel positions hx / w and hy / w,
+/// as hx (1 / w) (x0, y0, x1, y1).
+bool boxCornersInView(const Bounds3& box, const dmat4& M, const Camera& cam, double margin, double wRoom,
+                      double* extent);
+
 /// Sets up one triangle whose vertices are inside the clip volume: culls and fills `t`.
 /// Returns false, counting the reason in `counters`, when it draws nothing.
 bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, const Camera& cam, Cull cull,

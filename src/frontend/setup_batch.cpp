@@ -681,6 +681,56 @@ void TransformVertices(const dvec3* positions, size_t count, const dmat4& matrix
   }
 }
 
+// boxCornersInView() (frontend.hpp): the eight corners lane by lane, with boxInView's IEEE
+// operations in its order.
+bool BoxCornersInView(const Bounds3& box, const dmat4& matrix, const Camera& cam, double margin, double wRoom,
+                      double* extent) {
+  const D d;
+  constexpr size_t kCorners = 8;
+  const size_t N = std::min(hn::Lanes(d), kCorners);
+  HWY_ALIGN double cx[kCorners], cy[kCorners], cz[kCorners];  // corner c: bits 1, 2, 4 pick hi
+  for (size_t c = 0; c < kCorners; ++c) {
+    cx[c] = c & 1 ? box.hi.x : box.lo.x;
+    cy[c] = c & 2 ? box.hi.y : box.lo.y;
+    cz[c] = c & 4 ? box.hi.z : box.lo.z;
+  }
+  const V marginV = hn::Set(d, margin), nearV = hn::Set(d, cam.near), farV = hn::Set(d, cam.far);
+  const V gx0 = hn::Set(d, -kGuardBandPixels), gx1 = hn::Set(d, cam.width + kGuardBandPixels);
+  const V gy0 = hn::Set(d, -kGuardBandPixels), gy1 = hn::Set(d, cam.height + kGuardBandPixels);
+  const double inf = std::numeric_limits<double>::infinity();
+  V zMin = hn::Set(d, inf), x0 = zMin, y0 = zMin, zMax = hn::Set(d, -inf), x1 = zMax, y1 = zMax;
+  const M valid = hn::FirstN(d, N);  // (a vector wider than eight lanes: its first eight)
+  for (size_t first = 0; first < kCorners; first += N) {
+    const V x = hn::LoadU(d, cx + first), y = hn::LoadU(d, cy + first), z = hn::LoadU(d, cz + first);
+    auto row = [&](int r) {
+      return hn::Add(hn::Add(hn::Add(hn::Mul(hn::Set(d, matrix[0][r]), x), hn::Mul(hn::Set(d, matrix[1][r]), y)),
+                             hn::Mul(hn::Set(d, matrix[2][r]), z)),
+                     hn::Set(d, matrix[3][r]));
+    };
+    const V hx = row(0), hy = row(1), depth = row(2), w = row(3);
+    // planeDistance(corner, p) > margin for the six planes (frontend.cpp).
+    M inside = hn::And(hn::Gt(hn::Sub(depth, nearV), marginV), hn::Gt(hn::Sub(farV, depth), marginV));
+    inside = hn::And(inside, hn::Gt(hn::Sub(hx, hn::Mul(gx0, w)), marginV));
+    inside = hn::And(inside, hn::Gt(hn::Sub(hn::Mul(gx1, w), hx), marginV));
+    inside = hn::And(inside, hn::Gt(hn::Sub(hy, hn::Mul(gy0, w)), marginV));
+    inside = hn::And(inside, hn::Gt(hn::Sub(hn::Mul(gy1, w), hy), marginV));
+    if (!hn::AllTrue(d, hn::Or(inside, hn::Not(valid)))) return false;
+    const V room = hn::Set(d, wRoom);
+    zMin = hn::IfThenElse(valid, hn::Min(zMin, hn::Sub(w, room)), zMin);
+    zMax = hn::IfThenElse(valid, hn::Max(zMax, hn::Add(w, room)), zMax);
+    const V inverse = hn::Div(hn::Set(d, 1.0), w), sx = hn::Mul(hx, inverse), sy = hn::Mul(hy, inverse);
+    x0 = hn::IfThenElse(valid, hn::Min(x0, sx), x0), x1 = hn::IfThenElse(valid, hn::Max(x1, sx), x1);
+    y0 = hn::IfThenElse(valid, hn::Min(y0, sy), y0), y1 = hn::IfThenElse(valid, hn::Max(y1, sy), y1);
+  }
+  extent[0] = hn::GetLane(hn::MinOfLanes(d, zMin));
+  extent[1] = hn::GetLane(hn::MaxOfLanes(d, zMax));
+  extent[2] = hn::GetLane(hn::MinOfLanes(d, x0));
+  extent[3] = hn::GetLane(hn::MinOfLanes(d, y0));
+  extent[4] = hn::GetLane(hn::MaxOfLanes(d, x1));
+  extent[5] = hn::GetLane(hn::MaxOfLanes(d, y1));
+  return true;
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace hsr
 HWY_AFTER_NAMESPACE();
@@ -689,6 +739,12 @@ HWY_AFTER_NAMESPACE();
 namespace hsr {
 HWY_EXPORT(SetupBatch);
 HWY_EXPORT(TransformVertices);
+HWY_EXPORT(BoxCornersInView);
+
+bool boxCornersInView(const Bounds3& box, const dmat4& M, const Camera& cam, double margin, double wRoom,
+                      double* extent) {
+  return HWY_DYNAMIC_DISPATCH(BoxCornersInView)(box, M, cam, margin, wRoom, extent);
+}
 
 void transformVertices(const dvec3* positions, size_t count, const dmat4& M, const Camera& cam, uint8_t* outcodes,
                        ProjectedVertex* projected) {
