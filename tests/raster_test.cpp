@@ -442,6 +442,16 @@ TEST(Raster, BatchedShadingEqualsScalarOnEveryInstructionSet) {
   }
 }
 
+// A 640x480 perspective camera looking at the origin from (3, 4, 40), near 5 and far 60.
+Camera viewOfTheOrigin() {
+  CameraSpec spec;
+  spec.eye = {3, 4, 40};
+  spec.target = {0, 0, 0};
+  spec.near = 5;
+  spec.far = 60;
+  return resolveCamera(spec, 640, 480, Bounds3{});
+}
+
 // The SIMD vertex pass gives bit for bit transformVertex, clipOutcode and projectVertex, on
 // every instruction set: points in front of, behind and beside the camera, any count.
 TEST(Raster, VertexPassEqualsScalarOnEveryInstructionSet) {
@@ -449,12 +459,7 @@ TEST(Raster, VertexPassEqualsScalarOnEveryInstructionSet) {
   std::uniform_real_distribution<double> u(-30, 30);
   std::vector<dvec3> points(1003);
   for (dvec3& p : points) p = {u(rng), u(rng), u(rng)};
-  CameraSpec spec;
-  spec.eye = {3, 4, 40};
-  spec.target = {0, 0, 0};
-  spec.near = 5;
-  spec.far = 60;
-  const Camera cam = resolveCamera(spec, 640, 480, Bounds3{});
+  const Camera cam = viewOfTheOrigin();
   const dmat4 M = cam.pixelFromCamera * cam.cameraFromWorld;
   int inside = 0;
   const std::vector<int64_t> targets = hwy::SupportedAndGeneratedTargets();
@@ -487,12 +492,7 @@ TEST(Raster, VertexPassEqualsScalarOnEveryInstructionSet) {
 TEST(Raster, BoxCornersInViewEqualsScalarOnEveryInstructionSet) {
   std::mt19937_64 rng(80);
   std::uniform_real_distribution<double> centre(-12, 12), half(0, 6);
-  CameraSpec spec;
-  spec.eye = {3, 4, 40};
-  spec.target = {0, 0, 0};
-  spec.near = 5;
-  spec.far = 60;
-  const Camera cam = resolveCamera(spec, 640, 480, Bounds3{});
+  const Camera cam = viewOfTheOrigin();
   const dmat4 M = cam.pixelFromCamera * cam.cameraFromWorld;
   std::vector<Bounds3> boxes(600);
   for (size_t i = 0; i < boxes.size(); ++i) {
