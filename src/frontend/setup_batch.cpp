@@ -687,7 +687,8 @@ bool BoxCornersInView(const Bounds3& box, const dmat4& matrix, const Camera& cam
                       double* extent) {
   const D d;
   constexpr size_t kCorners = 8;
-  const size_t N = std::min(hn::Lanes(d), kCorners);
+  static_assert(kSetupBatch == kCorners, "D holds at most the eight corners");
+  const size_t N = hn::Lanes(d);  // (at most kSetupBatch = 8, a power of two: a divisor of 8)
   HWY_ALIGN double cx[kCorners], cy[kCorners], cz[kCorners];  // corner c: bits 1, 2, 4 pick hi
   for (size_t c = 0; c < kCorners; ++c) {
     cx[c] = c & 1 ? box.hi.x : box.lo.x;
@@ -699,7 +700,6 @@ bool BoxCornersInView(const Bounds3& box, const dmat4& matrix, const Camera& cam
   const V gy0 = hn::Set(d, -kGuardBandPixels), gy1 = hn::Set(d, cam.height + kGuardBandPixels);
   const double inf = std::numeric_limits<double>::infinity();
   V zMin = hn::Set(d, inf), x0 = zMin, y0 = zMin, zMax = hn::Set(d, -inf), x1 = zMax, y1 = zMax;
-  const M valid = hn::FirstN(d, N);  // (a vector wider than eight lanes: its first eight)
   for (size_t first = 0; first < kCorners; first += N) {
     const V x = hn::LoadU(d, cx + first), y = hn::LoadU(d, cy + first), z = hn::LoadU(d, cz + first);
     auto row = [&](int r) {
@@ -714,13 +714,12 @@ bool BoxCornersInView(const Bounds3& box, const dmat4& matrix, const Camera& cam
     inside = hn::And(inside, hn::Gt(hn::Sub(hn::Mul(gx1, w), hx), marginV));
     inside = hn::And(inside, hn::Gt(hn::Sub(hy, hn::Mul(gy0, w)), marginV));
     inside = hn::And(inside, hn::Gt(hn::Sub(hn::Mul(gy1, w), hy), marginV));
-    if (!hn::AllTrue(d, hn::Or(inside, hn::Not(valid)))) return false;
+    if (!hn::AllTrue(d, inside)) return false;
     const V room = hn::Set(d, wRoom);
-    zMin = hn::IfThenElse(valid, hn::Min(zMin, hn::Sub(w, room)), zMin);
-    zMax = hn::IfThenElse(valid, hn::Max(zMax, hn::Add(w, room)), zMax);
+    zMin = hn::Min(zMin, hn::Sub(w, room)), zMax = hn::Max(zMax, hn::Add(w, room));
     const V inverse = hn::Div(hn::Set(d, 1.0), w), sx = hn::Mul(hx, inverse), sy = hn::Mul(hy, inverse);
-    x0 = hn::IfThenElse(valid, hn::Min(x0, sx), x0), x1 = hn::IfThenElse(valid, hn::Max(x1, sx), x1);
-    y0 = hn::IfThenElse(valid, hn::Min(y0, sy), y0), y1 = hn::IfThenElse(valid, hn::Max(y1, sy), y1);
+    x0 = hn::Min(x0, sx), x1 = hn::Max(x1, sx);
+    y0 = hn::Min(y0, sy), y1 = hn::Max(y1, sy);
   }
   extent[0] = hn::GetLane(hn::MinOfLanes(d, zMin));
   extent[1] = hn::GetLane(hn::MaxOfLanes(d, zMax));
