@@ -959,13 +959,17 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
   HWY_ALIGN float row[kTileSize];  // a row of the tile, then streamed into the frame (core/stream-inl.h)
   const SetupTriangle* blockPlane = nullptr;  // the planes of the last block in a triangle's plane
   MappedPlanes blockM{};
+  // Row by row in two passes: the stored values of the row's lanes (by the tile's or block's
+  // state), then their eye depths. Apart, the second pass is a short loop of independent
+  // divisions that the processor overlaps; in one loop with the state's branches and the
+  // plane's arithmetic, a division's latency showed in every vector (depth image, in one process:
+  // layers 0.871, city 0.920, cubes 0.933 of the time).
+  HWY_ALIGN double stored[kTileSize];
   for (int y = rowBegin; y < std::min(rowEnd, tf.h); ++y) {
+    const double Y = double(tf.y0 + y) + 0.5;
     for (size_t k = 0; k < size_t(tf.w); k += N) {
-      const size_t count = std::min(N, size_t(tf.w) - k);
-      float* out = row + k;
       const int b = (y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize;  // lanes within one block
       const V X = hn::Iota(d, double(tf.x0 + int(k)) + 0.5);
-      const double Y = double(tf.y0 + y) + 0.5;
       V q;
       if (s.state == TileState::Plane) q = StoredDepth<S>(m, X, Y);
       else if (s.blockClear[b]) q = clearV;
@@ -978,10 +982,14 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
         q = StoredDepth<S>(blockM, X, Y);
       }
       else q = hn::Load(d, s.depth + size_t(y) * kTileSize + k);
-      const Mask drawn = hn::And(hn::FirstN(d, count), hn::Ne(q, clearV));
+      hn::Store(q, d, stored + k);
+    }
+    for (size_t k = 0; k < size_t(tf.w); k += N) {
+      const V q = hn::Load(d, stored + k);
+      const Mask drawn = hn::And(hn::FirstN(d, std::min(N, size_t(tf.w) - k)), hn::Ne(q, clearV));
       covered += hn::CountTrue(d, drawn);
       const V eye = hn::IfThenElse(drawn, EyeDepthOfStored<S, M>(q, job.depth), infinity);
-      hn::Store(hn::DemoteTo(df, eye), df, out);
+      hn::Store(hn::DemoteTo(df, eye), df, row + k);
     }
     StreamCopy(reinterpret_cast<uint32_t*>(frame.depth.data() + frame.index(tf.x0, tf.y0 + y)),
                reinterpret_cast<const uint32_t*>(row), size_t(tf.w));
