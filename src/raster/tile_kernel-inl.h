@@ -1139,6 +1139,38 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
     return 0;
   }
   HWY_ALIGN uint32_t rows[4][kTileSize];  // a row of the tile per output, then streamed (core/stream-inl.h)
+  if (s.state == TileState::Plane) {
+    // One triangle's plane over the whole tile: its ids and colour are the same in every row
+    // (written once); each row's eye depths in a loop of nothing else, whose divisions overlap
+    // (as in ResolveDepthT), with EyeDepthAt's operations. Against the general loop below
+    // (in one process, depth, face ids and colour): layers 0.85, city 0.91–0.92 of the time,
+    // cubes and sphere the same.
+    const SetupTriangle& t = bins.triangle(tileKey);
+    const auto face = hn::Set(du32, Bits32(int32_t(t.face))), triangle = hn::Set(du32, Bits32(int32_t(t.triangle)));
+    const auto color = hn::Set(du32, kColor ? colorOf(tileKey, t) : 0);
+    for (size_t k = 0; k < size_t(w); k += N) {
+      hn::Store(face, du32, rows[1] + k);
+      hn::Store(triangle, du32, rows[2] + k);
+      hn::Store(color, du32, rows[3] + k);
+    }
+    EyePlanesV plane{hn::Set(d, t.depthNum.a), hn::Zero(d), hn::Set(d, t.depthNum.c),
+                     hn::Set(d, t.depthDen.a), hn::Zero(d), hn::Set(d, t.depthDen.c)};
+    for (int y = rowBegin; y < std::min(rowEnd, h); ++y) {
+      const double Y = double(y0 + y) + 0.5;
+      plane.numBY = hn::Set(d, t.depthNum.b * Y), plane.denBY = hn::Set(d, t.depthDen.b * Y);
+      for (size_t k = 0; k < size_t(w); k += N) {
+        const V X = hn::Iota(d, double(x0 + int(k)) + 0.5);
+        hn::Store(hn::BitCast(du32, hn::DemoteTo(df, EyeDepthAt(plane, X))), du32, rows[0] + k);
+      }
+      covered += uint64_t(w);
+      const size_t at = frame.index(x0, y0 + y);
+      StreamCopy(reinterpret_cast<uint32_t*>(frame.depth.data() + at), rows[0], size_t(w));
+      if constexpr (kFace) StreamCopy(reinterpret_cast<uint32_t*>(frame.faceId.data() + at), rows[1], size_t(w));
+      if constexpr (kTriangle) StreamCopy(reinterpret_cast<uint32_t*>(frame.triangleId.data() + at), rows[2], size_t(w));
+      if constexpr (kColor) StreamCopy(reinterpret_cast<uint32_t*>(frame.color.data() + at), rows[3], size_t(w));
+    }
+    return covered;
+  }
   // The triangle of the uniform lanes last met (a plane tile's every run, a uniform block's
   // runs): its record read and its values broadcast once, not per run of lanes; the planes' b Y
   // once per row (the products EyeDepthRow forms: the same bits).
