@@ -1139,6 +1139,13 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
     return 0;
   }
   HWY_ALIGN uint32_t rows[4][kTileSize];  // a row of the tile per output, then streamed (core/stream-inl.h)
+  auto streamRows = [&](int y) HSR_ALWAYS_INLINE {  // rows[] into the frame's row y of the tile
+    const size_t at = frame.index(x0, y0 + y);
+    StreamCopy(reinterpret_cast<uint32_t*>(frame.depth.data() + at), rows[0], size_t(w));
+    if constexpr (kFace) StreamCopy(reinterpret_cast<uint32_t*>(frame.faceId.data() + at), rows[1], size_t(w));
+    if constexpr (kTriangle) StreamCopy(reinterpret_cast<uint32_t*>(frame.triangleId.data() + at), rows[2], size_t(w));
+    if constexpr (kColor) StreamCopy(reinterpret_cast<uint32_t*>(frame.color.data() + at), rows[3], size_t(w));
+  };
   if (s.state == TileState::Plane) {
     // One triangle's plane over the whole tile: its ids and colour are the same in every row
     // (written once); each row's eye depths in a loop of nothing else, whose divisions overlap
@@ -1163,11 +1170,7 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
         hn::Store(hn::BitCast(du32, hn::DemoteTo(df, EyeDepthAt(plane, X))), du32, rows[0] + k);
       }
       covered += uint64_t(w);
-      const size_t at = frame.index(x0, y0 + y);
-      StreamCopy(reinterpret_cast<uint32_t*>(frame.depth.data() + at), rows[0], size_t(w));
-      if constexpr (kFace) StreamCopy(reinterpret_cast<uint32_t*>(frame.faceId.data() + at), rows[1], size_t(w));
-      if constexpr (kTriangle) StreamCopy(reinterpret_cast<uint32_t*>(frame.triangleId.data() + at), rows[2], size_t(w));
-      if constexpr (kColor) StreamCopy(reinterpret_cast<uint32_t*>(frame.color.data() + at), rows[3], size_t(w));
+      streamRows(y);
     }
     return covered;
   }
@@ -1230,12 +1233,7 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
       if constexpr (kColor) hn::Store(uniformColor, du32, colorOut);
       covered += count;
     }
-    const size_t at = frame.index(x0, y0 + y);
-    StreamCopy(reinterpret_cast<uint32_t*>(frame.depth.data() + at), rows[0], size_t(w));
-    if constexpr (kFace) StreamCopy(reinterpret_cast<uint32_t*>(frame.faceId.data() + at), rows[1], size_t(w));
-    if constexpr (kTriangle) StreamCopy(reinterpret_cast<uint32_t*>(frame.triangleId.data() + at), rows[2], size_t(w));
-    if constexpr (kColor)
-      StreamCopy(reinterpret_cast<uint32_t*>(frame.color.data() + at), rows[3], size_t(w));
+    streamRows(y);
   }
   return covered;
 }
