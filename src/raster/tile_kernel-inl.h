@@ -1123,7 +1123,6 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
     throw std::logic_error("resolveTile: a tile held pixel by pixel was not through prepareResolve");
   ColorCache colorOf{job.shader};
   const uint32_t backgroundBits = Bits32(background);
-  const uint64_t tileKey = s.state == TileState::Plane ? s.planeKey : 0;
   const auto noId = hn::Set(du32, Bits32(int32_t(-1)));
   uint64_t covered = 0;
   if (s.state == TileState::Clear) {  // the background, straight into the frame
@@ -1152,9 +1151,9 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
     // (as in ResolveDepthT), with EyeDepthAt's operations. Against the general loop below
     // (in one process, depth, face ids and colour): layers 0.85, city 0.91–0.92 of the time,
     // cubes and sphere the same.
-    const SetupTriangle& t = bins.triangle(tileKey);
+    const SetupTriangle& t = bins.triangle(s.planeKey);
     const auto face = hn::Set(du32, Bits32(int32_t(t.face))), triangle = hn::Set(du32, Bits32(int32_t(t.triangle)));
-    const auto color = hn::Set(du32, kColor ? colorOf(tileKey, t) : 0);
+    const auto color = hn::Set(du32, kColor ? colorOf(s.planeKey, t) : 0);
     for (size_t k = 0; k < size_t(w); k += N) {
       hn::Store(face, du32, rows[1] + k);
       hn::Store(triangle, du32, rows[2] + k);
@@ -1174,9 +1173,10 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
     }
     return covered;
   }
-  // The triangle of the uniform lanes last met (a plane tile's every run, a uniform block's
-  // runs): its record read and its values broadcast once, not per run of lanes; the planes' b Y
-  // once per row (the products EyeDepthRow forms: the same bits).
+  // The tile is held pixel by pixel (state Pixels), block by block: the cells prepareResolve
+  // filled, or a block's uniform state (cleared, or a triangle's plane). The triangle of the
+  // uniform lanes last met: its record read and its values broadcast once, not per run of
+  // lanes; the planes' b Y once per row (the products EyeDepthRow forms: the same bits).
   uint64_t uniformKey = 0;
   double numB = 0, denB = 0, uniformY = -1;
   EyePlanesV planes{hn::Zero(d), hn::Zero(d), hn::Zero(d), hn::Zero(d), hn::Zero(d), hn::Zero(d)};
@@ -1190,9 +1190,8 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
       uint32_t* triangleOut = rows[2] + k;
       uint32_t* colorOut = rows[3] + k;
       const int b = (y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize;  // (lanes within one block)
-      const uint64_t blockKey = s.state == TileState::Pixels ? s.blockKey[b] : 0;
-      const bool empty = s.state == TileState::Pixels && s.blockClear[b];
-      if (s.state == TileState::Pixels && !blockKey && !empty) {  // the cells prepareResolve filled
+      const uint64_t key = s.blockKey[b];  // (0 when the block is cleared or held pixel by pixel)
+      if (!key && !s.blockClear[b]) {  // the cells prepareResolve filled
         hn::Vec<decltype(du32)> eye, face, triangle, color;
         hn::LoadInterleaved2(du32, reinterpret_cast<const uint32_t*>(s.depth + size_t(y) * kTileSize + k), eye, face);
         hn::LoadInterleaved2(du32, reinterpret_cast<const uint32_t*>(s.triangle + size_t(y) * kTileSize + k), triangle,
@@ -1204,8 +1203,7 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
         covered += hn::CountTrue(du32, hn::AndNot(hn::Eq(triangle, noId), hn::FirstN(du32, count)));
         continue;
       }
-      const uint64_t key = s.state == TileState::Pixels ? blockKey : tileKey;  // (0 when empty)
-      if (!key) {
+      if (!key) {  // cleared
         hn::Store(hn::Set(du32, Bits32(std::numeric_limits<float>::infinity())), du32, depthOut);
         hn::Store(noId, du32, faceOut);
         hn::Store(noId, du32, triangleOut);
