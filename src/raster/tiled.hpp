@@ -98,6 +98,9 @@ struct ChunkBins {
   std::vector<uint64_t> pairs;  // scratch of binChunk(): tile << 32 | localKey, in submission order
                                 // (Bins::late, clusters: | the face's or cluster's index)
   std::vector<double> cover;    // scratch of binChunk(): per tile, the bound of its covering triangles
+  // Bins::chunks only: per tile, the pixels of the boxes of the chunk's triangles binned there,
+  // each box cut to the tile (orderTile).
+  std::vector<uint32_t> area;
   uint64_t culled = 0;          // triangle-tile pairs not binned: behind a triangle covering the tile
   // Bins::chunks only: the part of the parallel job (core/parallel.hpp) whose thread set the chunk
   // up and binned it (its records are in that core's caches; set by the caller of binChunk).
@@ -295,9 +298,17 @@ struct TileOrder {
   uint64_t memoryBytes() const;
 };
 
+/// A tile of at least kUnsortedEntries triangles whose boxes (cut to the tile) hold at most
+/// kUnsortedArea pixels in all is not sorted (orderTile): see there.
+inline constexpr size_t kUnsortedEntries = 64;
+inline constexpr uint64_t kUnsortedArea = 3 * uint64_t(kTileSize) * uint64_t(kTileSize);
+
 /// The triangles binned to `tile`, roughly nearest first (a stable bucket sort of their nearest
 /// bounds by the eye depth they stand for, in `depth`'s format; in submission order when a bound
-/// is not finite), in `order.ordered` or `order.entries`, which it returns.
+/// is not finite, or for many small triangles: at least kUnsortedEntries, their boxes holding at
+/// most kUnsortedArea pixels in all — no order can save more than a few tiles' worth of pixel
+/// tests there, and in submission order the kernel reads their records in the order they were
+/// written, chunk by chunk), in `order.ordered` or `order.entries`, which it returns.
 /// The kernel's depth test makes the order free: a fragment wins when it is strictly nearer
 /// than the stored value, or equal to it and its triangle was submitted first (triangleKey) —
 /// per pixel, the nearest fragment and, among equals, the first submitted: the image the z-buffer
