@@ -670,6 +670,79 @@ TEST(Tiled, OrderTileVisitsByEyeDepthInEveryMapping) {
   }
 }
 
+// A tile of many small triangles (at least kUnsortedEntries, their boxes holding at most
+// kUnsortedArea pixels) is left in submission order; the same number of large ones is sorted.
+TEST(Tiled, OrderTileLeavesManySmallTrianglesInSubmissionOrder) {
+  for (const bool small : {true, false}) {
+    Scene scene;
+    scene.source = "test";
+    // 100 triangles facing the camera, farthest submitted first (1000 down to 10 away); small:
+    // about 4 pixels across, scattered over the tile; large: each covering the tile.
+    constexpr int kCount = 100;
+    for (int i = 0; i < kCount; ++i) {
+      const double d = 1000.0 - 9.9 * i;
+      const uint32_t first = uint32_t(scene.positions.size());
+      const double cx = small ? ((i % 10) - 4.5) * 0.02 * d : 0, cy = small ? ((i / 10) - 4.5) * 0.02 * d : 0;
+      const double r = small ? 0.03 * d : 2 * d;
+      scene.positions.push_back({cx - r, cy - r, -d});
+      scene.positions.push_back({cx + r, cy - r, -d});
+      scene.positions.push_back({cx, cy + r, -d});
+      const std::vector<uint32_t> face = {first, first + 1, first + 2};
+      scene.addFace(std::span<const uint32_t>(face), Rgba8{200, 0, 0, 255});
+    }
+    scene.finalize();
+    CameraSpec spec;
+    spec.eye = {0, 0, 0};
+    spec.target = {0, 0, -1};
+    spec.fovyDeg = 45;
+    spec.near = 1;
+    spec.far = 2000;
+    const Camera cam = resolveCamera(spec, 60, 60, scene.bounds());  // one tile
+    const DepthSetup depth{DepthFormat::parse("f32:reversed"), cam.near, cam.far, cam.orthographic};
+    FrontEndOutput fe;
+    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
+    ASSERT_EQ(fe.triangleCount(), size_t(kCount)) << small;
+    tiled::Bins bins;
+    tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
+    tiled::binChunk(bins, 0, fe.chunks[0]);
+    ASSERT_EQ(bins.tileCount(), 1);
+    uint64_t area = 0;
+    for (size_t i = 0; i < fe.chunks[0].triangles.size(); ++i) {
+      const SetupTriangle& t = fe.chunks[0].triangles[i];
+      area += uint64_t(t.maxX - t.minX + 1) * uint64_t(t.maxY - t.minY + 1);
+    }
+    EXPECT_EQ(bins.chunks[0].area[0], area) << small;  // (the boxes lie in the one tile)
+    EXPECT_EQ(area <= tiled::kUnsortedArea, small) << area;
+    tiled::TileOrder lists;
+    const std::vector<tiled::TileEntry>& order = tiled::orderTile(bins, 0, depth, lists);
+    ASSERT_EQ(order.size(), size_t(kCount)) << small;
+    // Small: in submission order. Large: roughly nearest first (by buckets), so one of the
+    // nearest, submitted last, before the farthest, submitted first.
+    bool submissionOrder = true;
+    for (size_t i = 1; i < order.size(); ++i) submissionOrder &= order[i - 1].key < order[i].key;
+    EXPECT_EQ(submissionOrder, small);
+    if (!small) EXPECT_GT(order.front().key, order.back().key);
+    // Either way, the frame is the reference's.
+    const Frame reference = renderWith(scene, cam, depth.format, RasterKind::HalfSpace, 1);
+    expectIdentical(reference, renderWith(scene, cam, depth.format, RasterKind::Tiled, 2), small ? "small" : "large", "");
+  }
+}
+
+// Seen from inside a closed mesh every visible face is a back face, shaded in the resolve (its
+// record carries no colour): colour, ids and depth are the reference's.
+TEST(Tiled, BackFacesSeenFromInsideResolveAsTheReference) {
+  const Scene scene = loadScene("builtin:sphere?n=20000");
+  const Camera cam = resolveCamera(insideCamera(scene), 256, 160, scene.bounds());
+  for (const char* f : {"f32:reversed", "u16:z"}) {
+    const DepthFormat format = DepthFormat::parse(f);
+    const Frame reference = renderWith(scene, cam, format, RasterKind::HalfSpace, 1);
+    EXPECT_GT(reference.stats.covered_pixels, 256u * 160u / 2) << f;
+    for (int threads : {1, 2})
+      expectIdentical(reference, renderWith(scene, cam, format, RasterKind::Tiled, threads),
+                      fmt::format("inside the sphere, {} threads {}", f, threads), "");
+  }
+}
+
 TEST(Tiled, EqualDepthGoesToTheTriangleSubmittedFirstWhateverTheVisitOrder) {
   Scene scene;
   scene.source = "test";
