@@ -304,16 +304,16 @@ TEST(Tiled, PerTileChunkListsNameEveryChunkWithItemsThere) {
 }
 
 // The front end's chunk size depends on the scene's triangle count alone (binning culls within a
-// chunk: the statistics must not depend on the thread count): whole clusters, 1024 to
-// kChunkTriangles triangles, and about 16 chunks for scenes of 16K to 64K triangles.
+// chunk: the statistics must not depend on the thread count): whole clusters, kMinChunkTriangles
+// to kChunkTriangles triangles, and about 16 chunks for scenes of 4K to 64K triangles.
 TEST(Tiled, ChunkSizeFollowsTheSceneOnly) {
   for (const size_t n : {size_t(0), size_t(1), size_t(1000), size_t(10000), size_t(16384), size_t(20000), size_t(43202),
                          size_t(65536), size_t(1003520)}) {
     const size_t k = chunkTrianglesFor(n);
     EXPECT_EQ(k % kClusterTriangles, 0u) << n;
-    EXPECT_GE(k, 1024u) << n;
+    EXPECT_GE(k, kMinChunkTriangles) << n;
     EXPECT_LE(k, kChunkTriangles) << n;
-    if (n >= 16 * 1024 && n <= 16 * kChunkTriangles) {
+    if (n >= 16 * kMinChunkTriangles && n <= 16 * kChunkTriangles) {
       const size_t chunks = (n + k - 1) / k;
       EXPECT_GE(chunks, 15u) << n;
       EXPECT_LE(chunks, 16u) << n;
@@ -326,13 +326,13 @@ TEST(Tiled, ChunkSizeFollowsTheSceneOnly) {
     opt.threads = threads;
     FrontEndOutput fe;
     runFrontEnd(scene, cam, opt, fe, {});
-    EXPECT_EQ(fe.chunkTriangles, 1024u);
-    ASSERT_EQ(fe.chunkCount, 10u);
+    EXPECT_EQ(fe.chunkTriangles, 640u);  // 10000 / 16, rounded up to whole clusters
+    ASSERT_EQ(fe.chunkCount, 16u);
     for (size_t c = 0; c < fe.chunkCount; ++c) {
-      EXPECT_EQ(fe.chunks[c].firstTriangle, c * 1024);
+      EXPECT_EQ(fe.chunks[c].firstTriangle, c * 640);
       for (const SetupTriangle& t : fe.chunks[c].triangles) {
-        EXPECT_GE(t.triangle, c * 1024);
-        EXPECT_LT(t.triangle, (c + 1) * 1024);
+        EXPECT_GE(t.triangle, c * 640);
+        EXPECT_LT(t.triangle, (c + 1) * 640);
       }
     }
   }
