@@ -629,6 +629,28 @@ TEST(Tiled, ResolvingIdsNeedsPrepareResolve) {
   EXPECT_GT(pixelTiles, 0);
 }
 
+// A triangle facing a camera at the origin that looks down -z: centred on (cx, cy), d away,
+// r its half-width.
+void addFacingTriangle(Scene& scene, double cx, double cy, double r, double d) {
+  const uint32_t first = uint32_t(scene.positions.size());
+  scene.positions.push_back({cx - r, cy - r, -d});
+  scene.positions.push_back({cx + r, cy - r, -d});
+  scene.positions.push_back({cx, cy + r, -d});
+  const std::vector<uint32_t> face = {first, first + 1, first + 2};
+  scene.addFace(std::span<const uint32_t>(face), Rgba8{200, 0, 0, 255});
+}
+
+// A 60x60 image (one tile) from the origin down -z.
+Camera oneTileCamera(const Scene& scene, double near, double far, double fovyDeg = 0) {
+  CameraSpec spec;
+  spec.eye = {0, 0, 0};
+  spec.target = {0, 0, -1};
+  if (fovyDeg > 0) spec.fovyDeg = fovyDeg;
+  spec.near = near;
+  spec.far = far;
+  return resolveCamera(spec, 60, 60, scene.bounds());
+}
+
 // orderTile's buckets are of equal width in eye depth, whatever the mapping: with a perspective
 // camera the z, reversed and inv mappings crowd the distance into a few stored values (here 50
 // and 100 units away fall into one bucket of equal stored width), and the tile's nearer
@@ -637,22 +659,9 @@ TEST(Tiled, OrderTileVisitsByEyeDepthInEveryMapping) {
   Scene scene;
   scene.source = "test";
   // Three squares' first triangles facing the camera, farthest submitted first: 100, 50, 1 away.
-  for (double d : {100.0, 50.0, 1.0}) {
-    const uint32_t first = uint32_t(scene.positions.size());
-    const double r = 0.4 * d;
-    scene.positions.push_back({-r, -r, -d});
-    scene.positions.push_back({r, -r, -d});
-    scene.positions.push_back({0, r, -d});
-    const std::vector<uint32_t> face = {first, first + 1, first + 2};
-    scene.addFace(std::span<const uint32_t>(face), Rgba8{200, 0, 0, 255});
-  }
+  for (double d : {100.0, 50.0, 1.0}) addFacingTriangle(scene, 0, 0, 0.4 * d, d);
   scene.finalize();
-  CameraSpec spec;
-  spec.eye = {0, 0, 0};
-  spec.target = {0, 0, -1};
-  spec.near = 0.1;
-  spec.far = 1000;
-  const Camera cam = resolveCamera(spec, 60, 60, scene.bounds());  // one tile
+  const Camera cam = oneTileCamera(scene, 0.1, 1000);
   for (const char* f : {"f32:z", "u24:z", "f32:reversed", "u32:inv", "f32:linear", "u16:reversed"}) {
     const DepthSetup depth{DepthFormat::parse(f), cam.near, cam.far, cam.orthographic};
     FrontEndOutput fe;
@@ -681,23 +690,11 @@ TEST(Tiled, OrderTileLeavesManySmallTrianglesInSubmissionOrder) {
     constexpr int kCount = 100;
     for (int i = 0; i < kCount; ++i) {
       const double d = 1000.0 - 9.9 * i;
-      const uint32_t first = uint32_t(scene.positions.size());
       const double cx = small ? ((i % 10) - 4.5) * 0.02 * d : 0, cy = small ? ((i / 10) - 4.5) * 0.02 * d : 0;
-      const double r = small ? 0.03 * d : 2 * d;
-      scene.positions.push_back({cx - r, cy - r, -d});
-      scene.positions.push_back({cx + r, cy - r, -d});
-      scene.positions.push_back({cx, cy + r, -d});
-      const std::vector<uint32_t> face = {first, first + 1, first + 2};
-      scene.addFace(std::span<const uint32_t>(face), Rgba8{200, 0, 0, 255});
+      addFacingTriangle(scene, cx, cy, small ? 0.03 * d : 2 * d, d);
     }
     scene.finalize();
-    CameraSpec spec;
-    spec.eye = {0, 0, 0};
-    spec.target = {0, 0, -1};
-    spec.fovyDeg = 45;
-    spec.near = 1;
-    spec.far = 2000;
-    const Camera cam = resolveCamera(spec, 60, 60, scene.bounds());  // one tile
+    const Camera cam = oneTileCamera(scene, 1, 2000, 45);
     const DepthSetup depth{DepthFormat::parse("f32:reversed"), cam.near, cam.far, cam.orthographic};
     FrontEndOutput fe;
     runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
