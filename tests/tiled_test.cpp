@@ -721,7 +721,8 @@ TEST(Tiled, OrderTileLeavesManySmallTrianglesInSubmissionOrder) {
     if (!small) EXPECT_GT(order.front().key, order.back().key);
     // Either way, the frame is the reference's.
     const Frame reference = renderWith(scene, cam, depth.format, RasterKind::HalfSpace, 1);
-    expectIdentical(reference, renderWith(scene, cam, depth.format, RasterKind::Tiled, 2), small ? "small" : "large", "");
+    expectIdentical(reference, renderWith(scene, cam, depth.format, RasterKind::Tiled, 2), small ? "small" : "large",
+                    "");
   }
 }
 

@@ -1056,7 +1056,8 @@ HWY_INLINE void ResolveFour(const Bins& bins, uint64_t* keys, uint64_t* cells, d
   const VH Xv = hn::Iota(h, X), Yv = hn::Set(h, Y);
   const VH eye = hn::Div(hn::Add(hn::Add(hn::Mul(p[0], Xv), hn::Mul(p[1], Yv)), p[2]),
                          hn::Add(hn::Add(hn::Mul(p[3], Xv), hn::Mul(q[0], Yv)), q[1]));
-  const auto eyeBits = hn::PromoteTo(hu, hn::BitCast(hn::Rebind<uint32_t, H4>(), hn::DemoteTo(hn::Rebind<float, H4>(), eye)));
+  const hn::Rebind<float, H4> hf;
+  const auto eyeBits = hn::PromoteTo(hu, hn::BitCast(hn::Rebind<uint32_t, H4>(), hn::DemoteTo(hf, eye)));
   const auto ids = hn::BitCast(hu, q[2]), flags = hn::BitCast(hu, q[3]);
   const auto high = hn::Set(hu, 0xFFFFFFFF00000000ull);
   auto cell = hn::Or(hn::And(ids, high), eyeBits);  // eye depth, face

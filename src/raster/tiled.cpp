@@ -75,10 +75,10 @@ uint64_t Bins::memoryBytes() const {
                    (tileEntries.capacity() + tileChunkStart.capacity() + tileChunks.capacity()) * sizeof(uint32_t);
   for (const std::vector<ChunkBins>* set : {&chunks, &late, &clusters})
     for (const ChunkBins& c : *set)
-      bytes += (c.start.capacity() + c.items.capacity() + c.area.capacity()) * sizeof(uint32_t) + c.pairs.capacity() * sizeof(uint64_t) +
+      bytes += (c.start.capacity() + c.items.capacity()) * sizeof(uint32_t) + c.pairs.capacity() * sizeof(uint64_t) +
                (c.itemNearest.capacity() + c.cover.capacity() + c.slotNearest.capacity()) * sizeof(double) +
                c.slotBox.capacity() * sizeof(ChunkBins::Box) +
-               (c.itemBox.capacity() + c.touched.capacity()) * sizeof(uint32_t) +
+               (c.itemBox.capacity() + c.touched.capacity() + c.area.capacity()) * sizeof(uint32_t) +
                c.touchedBits.capacity() * sizeof(uint64_t) + c.records.capacity() * sizeof(SetupTriangle) +
                c.setUpCapacity + c.survivors.capacity() + sizeof(c);
   return bytes;
