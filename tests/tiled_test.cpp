@@ -651,6 +651,81 @@ Camera oneTileCamera(const Scene& scene, double near, double far, double fovyDeg
   return resolveCamera(spec, 60, 60, scene.bounds());
 }
 
+// Set-up takes the triangles of a mesh whose vertices are all inside the clip volume
+// (FrontEndOutput::meshUnclipped) to its batches without reading their outcodes: the records,
+// their order and the nearest bounds are those of setupTriangle on each triangle alone, beside a
+// mesh that needs clipping, with a whole scene and with set-up of some meshes only.
+TEST(Tiled, UnclippedMeshesAreSetUpAsTriangleByTriangle) {
+  Scene scene;
+  auto addMesh = [&](const char* name, double r, double depth, int count) {
+    scene.beginMesh(name);
+    for (int i = 0; i < count; ++i)
+      addFacingTriangle(scene, 0.8 * std::sin(0.7 * i), 0.6 * std::cos(1.3 * i), r, depth + 0.01 * i);
+  };
+  addMesh("inside", 0.05, 3, 150);
+  addMesh("beyond the guard band", 1e4, 4, 40);  // (each triangle clipped)
+  addMesh("inside too", 0.2, 2, 70);
+  scene.finalize();
+  ASSERT_EQ(scene.meshes.size(), 3u);
+  const Camera cam = oneTileCamera(scene, 0.5, 100, 60);
+  const DepthSetup depth{DepthFormat::parse("f32:reversed"), cam.near, cam.far, cam.orthographic};
+  const RenderOptions opt;
+  FrontEndOutput vertices, fe;
+  runVertexPass(scene, cam, opt, vertices);
+  // Every triangle of a mesh given, alone, in submission order.
+  auto alone = [&](std::initializer_list<size_t> meshes, std::vector<SetupTriangle>& out,
+                   std::vector<double>& nearest) {
+    for (size_t m : meshes) {
+      const MeshRange& mesh = scene.meshes[m];
+      for (uint32_t i = mesh.firstTriangle; i < mesh.firstTriangle + mesh.triangleCount; ++i) {
+        const Triangle& t = scene.triangles[i];
+        ProjectedVertex v[3];
+        for (int k = 0; k < 3; ++k) {
+          ASSERT_EQ(vertices.outcodes[t.v[k]], 0) << "triangle " << i;
+          v[k] = vertices.projected[t.v[k]];
+        }
+        SetupTriangle st;
+        FrontEndCounters counters;
+        if (!setupTriangle(v, i, t.face, cam, Cull::None, counters, st)) continue;
+        out.push_back(st);
+        nearest.push_back(nearestStored(st, depth));
+      }
+    }
+  };
+  // The set-up triangles of meshes 0 and 2 from `fe`, checked against those alone.
+  auto check = [&](std::initializer_list<size_t> meshes, const char* what) {
+    std::vector<SetupTriangle> expected, got;
+    std::vector<double> expectedNearest, gotNearest;
+    alone(meshes, expected, expectedNearest);
+    ASSERT_GT(expected.size(), 50u) << what;
+    for (size_t c = 0; c < fe.chunkCount; ++c)
+      for (size_t i = 0; i < fe.chunks[c].triangles.size(); ++i) {
+        const SetupTriangle& t = fe.chunks[c].triangles[i];
+        if (t.triangle >= scene.meshes[1].firstTriangle && t.triangle < scene.meshes[2].firstTriangle) continue;
+        got.push_back(t);
+        gotNearest.push_back(fe.chunks[c].nearest[i]);
+      }
+    ASSERT_EQ(got.size(), expected.size()) << what;
+    for (size_t i = 0; i < got.size(); ++i) {
+      const std::string at = fmt::format("{}, triangle {}", what, i);
+      EXPECT_EQ(std::memcmp(&got[i], &expected[i], offsetof(SetupTriangle, frontFacing)), 0) << at;  // (then padding)
+      EXPECT_EQ(got[i].frontFacing, expected[i].frontFacing) << at;
+      EXPECT_EQ(got[i].coverage, expected[i].coverage) << at;
+      EXPECT_EQ(gotNearest[i], expectedNearest[i]) << at;
+    }
+  };
+  runSetUp(scene, cam, opt, vertices, fe, {}, &depth);
+  EXPECT_EQ(fe.meshUnclipped, (std::vector<uint8_t>{1, 0, 1}));
+  EXPECT_GT(fe.clipped, 0u);  // the middle mesh went through clipping
+  check({0, 2}, "whole scene");
+  const std::vector<TriangleRange> only = {{scene.meshes[2].firstTriangle,
+                                            scene.meshes[2].firstTriangle + scene.meshes[2].triangleCount}};
+  runSetUp(scene, cam, opt, vertices, fe, {}, &depth, false, true, &only);
+  EXPECT_EQ(fe.meshUnclipped, (std::vector<uint8_t>{0, 0, 1}));  // (only the meshes set up are tested)
+  EXPECT_EQ(fe.clipped, 0u);
+  check({2}, "mesh 2 only");
+}
+
 // orderTile's buckets are of equal width in eye depth, whatever the mapping: with a perspective
 // camera the z, reversed and inv mappings crowd the distance into a few stored values (here 50
 // and 100 units away fall into one bucket of equal stored width), and the tile's nearer

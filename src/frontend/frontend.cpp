@@ -375,7 +375,8 @@ std::vector<SetupTriangle> FrontEndOutput::flatten() const {
 
 uint64_t FrontEndOutput::memoryBytes() const {
   uint64_t bytes = outcodes.capacity() +
-                   projected.capacity() * sizeof(ProjectedVertex) + faceVisible.capacity() + meshCulled.capacity();
+                   projected.capacity() * sizeof(ProjectedVertex) + faceVisible.capacity() + meshCulled.capacity() +
+                   meshUnclipped.capacity();
   for (const auto& c : chunks)
     bytes += c.triangles.capacity() * sizeof(SetupTriangle) + c.nearest.capacity() * sizeof(double) +
              c.deferred.capacity() * sizeof(DeferredFace) + c.clusters.capacity() * sizeof(DeferredCluster);
@@ -391,8 +392,9 @@ namespace {
 // the clip volume are set up in batches with SIMD (setupBatch); a clipped one flushes the batch
 // first, so the output stays in submission order.
 void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& options, const TriangleShader& shade,
-                const FrontEndOutput& fe, const DepthSetup* depth, bool defer, const ClusterView* clusters,
-                size_t chunkBegin, size_t chunkEnd, const std::vector<TriangleRange>* only, FrontEndChunk& out) {
+                const FrontEndOutput& fe, const uint8_t* unclipped, const DepthSetup* depth, bool defer,
+                const ClusterView* clusters, size_t chunkBegin, size_t chunkEnd, const std::vector<TriangleRange>* only,
+                FrontEndChunk& out) {
   out.triangles.clear();
   out.nearest.clear();
   out.deferred.clear();
@@ -448,9 +450,30 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
   HVertex poly[3 + kPlanes], scratch[3 + kPlanes];
   SetupTriangle st;
   static_assert(kChunkTriangles % kClusterTriangles == 0, "a cluster lies in one chunk");
-  // The triangles [begin, end), in order.
+  // The triangles [begin, end), in order, in runs of one mesh (or none). Those of a mesh whose
+  // vertices are all inside the clip volume (`unclipped`, per mesh) go to the batch a cluster at
+  // a time, without their vertices' outcodes read one by one (in one process: sphere
+  // --depth-only --cull-back 0.955x the time, its frame 0.965x, clutter 0.948x; random, city
+  // and cubes unchanged).
+  const std::vector<MeshRange>& meshes = scene.meshes;
   auto segment = [&](const size_t begin, const size_t end) {
+    // The first mesh not wholly before `begin` (meshes are in triangle order).
+    size_t mesh = size_t(std::partition_point(meshes.begin(), meshes.end(), [&](const MeshRange& m) {
+                           return size_t(m.firstTriangle) + m.triangleCount <= begin;
+                         }) - meshes.begin());
+    size_t runEnd = begin;  // the current run: [.., runEnd), its triangles unclipped or not
+    bool unclippedRun = false;
     for (size_t ti = begin; ti < end; ++ti) {
+      if (ti >= runEnd) {
+        while (mesh < meshes.size() && size_t(meshes[mesh].firstTriangle) + meshes[mesh].triangleCount <= ti) ++mesh;
+        if (mesh < meshes.size() && meshes[mesh].firstTriangle <= ti) {
+          unclippedRun = unclipped && unclipped[mesh];
+          runEnd = size_t(meshes[mesh].firstTriangle) + meshes[mesh].triangleCount;
+        } else {  // between meshes (or after the last)
+          unclippedRun = false;
+          runEnd = mesh < meshes.size() ? meshes[mesh].firstTriangle : end;
+        }
+      }
       const Triangle& tri = scene.triangles[ti];
       if (clusters && ti % kClusterTriangles == 0 && fe.meshInView(tri.face)) {  // (a cluster is in one mesh)
         const TriangleCluster& cluster = scene.clusters[ti / kClusterTriangles];
@@ -473,6 +496,30 @@ void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& opti
             continue;
           }
         }
+      }
+      if (unclippedRun) {  // (a mesh in view: none of its vertices is outside)
+        // The run's triangles up to the next cluster, batch by batch.
+        const size_t stop = std::min(runEnd, std::min(end, clusters ? (ti / kClusterTriangles + 1) * kClusterTriangles
+                                                                     : end));
+        const Triangle* from = scene.triangles.data();
+        const ProjectedVertex* projected = fe.projected.data();
+        for (size_t t = ti; t < stop;) {
+          const size_t take = std::min(stop - t, kBatch - batched);
+          for (size_t i = 0; i < take; ++i) {
+            const Triangle& tr = from[t + i];
+            for (int k = 0; k < 3; ++k) {
+              batchVertex[k][batched + i] = tr.v[k];
+              __builtin_prefetch(projected + tr.v[k]);  // (setupBatch reads it a batch later)
+            }
+            batchTriangle[batched + i] = uint32_t(t + i);
+            batchFace[batched + i] = tr.face;
+          }
+          t += take;
+          batched += take;
+          if (batched == kBatch) flush();
+        }
+        ti = stop - 1;
+        continue;
       }
       if (!fe.meshInView(tri.face)) {
         ++counters.culledFrustum;
@@ -597,6 +644,27 @@ void runSetUp(const Scene& scene, const Camera& cam, const RenderOptions& option
   const bool clusters = ((deferBackFaces && nearestFor) || options.cull == Cull::Back) && deferClusters &&
                         scene.clusters.size() == (nt + kClusterTriangles - 1) / kClusterTriangles;
   const ClusterView view = clusters ? clusterView(cam) : ClusterView{};
+  // The meshes set-up meets (those of `only`, or all) whose vertices all have outcode 0.
+  const size_t meshCount = scene.meshes.size();
+  out.meshUnclipped.assign(meshCount, 0);
+  auto testUnclipped = [&](size_t m) {
+    const MeshRange& mesh = scene.meshes[m];
+    if (mesh.vertexCount == 0 || (m < vertices.meshCulled.size() && vertices.meshCulled[m])) return;
+    const uint8_t* code = vertices.outcodes.data() + mesh.firstVertex;
+    uint8_t any = 0;
+    for (uint32_t v = 0; v < mesh.vertexCount; ++v) any |= code[v];
+    out.meshUnclipped[m] = any == 0;
+  };
+  if (!only) {
+    for (size_t m = 0; m < meshCount; ++m) testUnclipped(m);
+  } else {
+    auto r = only->begin();
+    for (size_t m = 0; m < meshCount && r != only->end(); ++m) {
+      const size_t first = scene.meshes[m].firstTriangle, last = first + scene.meshes[m].triangleCount;
+      while (r != only->end() && r->end <= first) ++r;
+      if (r != only->end() && r->first < last) testUnclipped(m);
+    }
+  }
   out.chunkTriangles = chunkTrianglesFor(nt);
   const size_t per = out.chunkTriangles;
   out.chunkCount = (nt + per - 1) / per;
@@ -605,8 +673,9 @@ void runSetUp(const Scene& scene, const Camera& cam, const RenderOptions& option
     FrontEndChunk& chunk = out.chunks[c];
     chunk.counters = FrontEndCounters{};
     chunk.firstTriangle = uint32_t(c * per);
-    setupRange(scene, cam, options, shade, vertices, nearestFor, deferBackFaces && nearestFor,
-               view.enabled ? &view : nullptr, c * per, std::min(nt, (c + 1) * per), only, chunk);
+    setupRange(scene, cam, options, shade, vertices, out.meshUnclipped.data(), nearestFor,
+               deferBackFaces && nearestFor, view.enabled ? &view : nullptr, c * per, std::min(nt, (c + 1) * per),
+               only, chunk);
     if (consumer) consumer(c);
   });
   for (size_t c = 0; c < out.chunkCount; ++c) out.add(out.chunks[c].counters);

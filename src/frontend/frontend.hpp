@@ -235,6 +235,9 @@ struct FrontEndOutput : FrontEndCounters {
   // is (the usual case: no 1-byte-per-face pass over memory each frame).
   std::vector<uint8_t> faceVisible;
   std::vector<uint8_t> meshCulled;  // per mesh, 1 when its box lies wholly outside a clipping plane
+  // Per mesh, filled by runSetUp: 1 when every vertex of its range has outcode 0 (its triangles
+  // need no clipping: set-up batches them without reading their vertices' outcodes).
+  std::vector<uint8_t> meshUnclipped;
   /// Whether face `face`'s mesh was not culled whole (see faceVisible).
   bool meshInView(uint32_t face) const { return faceVisible.empty() || faceVisible[face]; }
 };
