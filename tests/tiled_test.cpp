@@ -754,6 +754,21 @@ TEST(Tiled, OrderTileVisitsByEyeDepthInEveryMapping) {
   }
 }
 
+// Nearest first by buckets fine enough for the depth complexity of the built-in layers: 64
+// screen-filling quads at evenly spaced depths, submitted farthest first. Each tile visits the
+// nearest quad's triangles before the others (kOrderBuckets: two layers to a bucket with 32
+// buckets, the farther drawn first), so every pixel is written once, in every depth format.
+TEST(Tiled, StackedLayersAreEachWrittenOnce) {
+  const Scene scene = loadScene("builtin:layers?n=64");
+  const Camera cam = resolveCamera(*scene.camera, 640, 480, scene.bounds());
+  for (const char* f : {"f32:reversed", "f32:z", "u24:z", "u32:inv", "f32:linear"})
+    for (const FrameOutputs outputs : {FrameOutputs::All, FrameOutputs::DepthOnly}) {
+      const Frame frame = renderWith(scene, cam, DepthFormat::parse(f), RasterKind::Tiled, 2, outputs);
+      EXPECT_EQ(frame.stats.covered_pixels, uint64_t(cam.width) * uint64_t(cam.height)) << f;
+      EXPECT_EQ(frame.stats.depth_writes, frame.stats.covered_pixels) << f << " " << frameOutputsName(outputs);
+    }
+}
+
 // A tile of many small triangles (at least kUnsortedEntries, their boxes holding at most
 // kUnsortedArea pixels) is left in submission order; the same number of large ones is sorted.
 TEST(Tiled, OrderTileLeavesManySmallTrianglesInSubmissionOrder) {

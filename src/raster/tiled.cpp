@@ -433,7 +433,8 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, const DepthS
   // bound is less than 1.25 times as far as its nearest, the stored value is nearly affine in
   // eye depth over that range, and the buckets stay in it: no division per triangle (the
   // sphere's tiles, 1000 triangles each at about one distance).
-  constexpr int kBuckets = 32;
+  constexpr int kBuckets = kOrderBuckets;
+  static_assert(kBuckets <= 256, "a bucket's index is a byte");
   OrderKey key = orderKeyOf(depth);
   double keyLo = lo, keyHi = hi;  // (the key is monotonic in the stored value)
   if (key.eye) {

@@ -302,6 +302,13 @@ struct TileOrder {
 /// kUnsortedArea pixels in all is not sorted (orderTile): see there.
 inline constexpr size_t kUnsortedEntries = 64;
 inline constexpr uint64_t kUnsortedArea = 3 * uint64_t(kTileSize) * uint64_t(kTileSize);
+/// orderTile's buckets (at most 256: a bucket's index is a byte). With 32, surfaces less than a
+/// thirty-second of a tile's depth range apart shared a bucket and were visited in submission
+/// order: the 64 stacked layers, farthest submitted first, wrote 1.15 times the pixels they cover.
+/// With 128 (in one process, Intel Xeon with AVX-512, 2 threads): layers frame 0.935x the time,
+/// depth only 0.968x; city 0.982x and 0.993x; random 0.987x and 0.989x; clutter frame 0.979x;
+/// cubes the same. (256: about the same; 4 per triangle of the tile, at least 32: less gain.)
+inline constexpr int kOrderBuckets = 128;
 
 /// The triangles binned to `tile`, roughly nearest first (a stable bucket sort of their nearest
 /// bounds by the eye depth they stand for, in `depth`'s format; in submission order when a bound
