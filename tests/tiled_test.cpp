@@ -124,6 +124,20 @@ Frame renderWith(const Scene& scene, const Camera& cam, DepthFormat format, Rast
   return render(scene, cam, o);
 }
 
+// Triangle `index` of `scene` set up alone (setupTriangle) from the vertex pass `vertices`, its
+// vertices all inside the clip volume (asserted); `kept`: whether set-up kept it.
+void setUpAlone(const Scene& scene, const FrontEndOutput& vertices, uint32_t index, const Camera& cam, Cull cull,
+                FrontEndCounters& counters, SetupTriangle& st, bool& kept) {
+  kept = false;
+  const Triangle& t = scene.triangles[index];
+  ProjectedVertex v[3];
+  for (int k = 0; k < 3; ++k) {
+    ASSERT_EQ(vertices.outcodes[t.v[k]], 0) << "triangle " << index;
+    v[k] = vertices.projected[t.v[k]];
+  }
+  kept = setupTriangle(v, index, t.face, cam, cull, counters, st);
+}
+
 // Expects `fast` bit-identical to `reference`; returns false (after one failure message with a
 // replay command) when not.
 bool expectIdentical(const Frame& reference, const Frame& fast, const std::string& what, const std::string& replay) {
@@ -678,15 +692,12 @@ TEST(Tiled, UnclippedMeshesAreSetUpAsTriangleByTriangle) {
     for (size_t m : meshes) {
       const MeshRange& mesh = scene.meshes[m];
       for (uint32_t i = mesh.firstTriangle; i < mesh.firstTriangle + mesh.triangleCount; ++i) {
-        const Triangle& t = scene.triangles[i];
-        ProjectedVertex v[3];
-        for (int k = 0; k < 3; ++k) {
-          ASSERT_EQ(vertices.outcodes[t.v[k]], 0) << "triangle " << i;
-          v[k] = vertices.projected[t.v[k]];
-        }
         SetupTriangle st;
         FrontEndCounters counters;
-        if (!setupTriangle(v, i, t.face, cam, Cull::None, counters, st)) continue;
+        bool kept = false;
+        setUpAlone(scene, vertices, i, cam, Cull::None, counters, st, kept);
+        ASSERT_FALSE(HasFatalFailure());
+        if (!kept) continue;
         out.push_back(st);
         nearest.push_back(nearestStored(st, depth));
       }
@@ -937,15 +948,12 @@ TEST(Tiled, DeferredClusterBoundsEveryTriangle) {
             ++clusters;
             for (size_t i = 0; i < kClusterTriangles; ++i) {
               const uint32_t index = uint32_t(dc.cluster * kClusterTriangles + i);
-              const Triangle& t = scene.triangles[index];
-              ProjectedVertex v[3];
-              for (int j = 0; j < 3; ++j) {
-                ASSERT_EQ(fe.outcodes[t.v[j]], 0) << "cluster " << dc.cluster;
-                v[j] = fe.projected[t.v[j]];
-              }
               SetupTriangle st;
               FrontEndCounters counters;
-              if (!setupTriangle(v, index, t.face, cam, Cull::None, counters, st)) continue;
+              bool kept = false;
+              setUpAlone(scene, fe, index, cam, Cull::None, counters, st, kept);
+              ASSERT_FALSE(HasFatalFailure()) << "cluster " << dc.cluster;
+              if (!kept) continue;
               ++triangles;
               EXPECT_TRUE(st.minX >= dc.minX && st.maxX <= dc.maxX && st.minY >= dc.minY && st.maxY <= dc.maxY)
                   << "triangle " << index;
@@ -984,15 +992,12 @@ TEST(Tiled, CulledClustersAreBackFacesEveryTriangle) {
         ++culled;
         for (size_t i = 0; i < kClusterTriangles; ++i) {
           const uint32_t index = uint32_t(k * kClusterTriangles + i);
-          const Triangle& t = scene.triangles[index];
-          ProjectedVertex v[3];
-          for (int j = 0; j < 3; ++j) {
-            ASSERT_EQ(fe.outcodes[t.v[j]], 0) << "cluster " << k;
-            v[j] = fe.projected[t.v[j]];
-          }
           SetupTriangle st;
           FrontEndCounters counters;
-          EXPECT_FALSE(setupTriangle(v, index, t.face, cam, Cull::Back, counters, st)) << "triangle " << index;
+          bool kept = true;
+          setUpAlone(scene, fe, index, cam, Cull::Back, counters, st, kept);
+          ASSERT_FALSE(HasFatalFailure()) << "cluster " << k;
+          EXPECT_FALSE(kept) << "triangle " << index;
           EXPECT_EQ(counters.culledBackface, 1u) << "triangle " << index;
         }
       }
