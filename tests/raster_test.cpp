@@ -5,10 +5,13 @@
 #include <cmath>
 #include <cstddef>
 #include <cstring>
+#include <fstream>
 #include <hwy/targets.h>
 #include <limits>
 #include <map>
 #include <random>
+#include <sstream>
+#include <string>
 
 #include "core/shading.hpp"
 #include "core/stream_fill.hpp"
@@ -639,6 +642,40 @@ TEST(Stream, FrameBuffersAreCacheLineAligned) {
     for (const void* p : {static_cast<const void*>(frame.faceId.data()), static_cast<const void*>(frame.triangleId.data()),
                           static_cast<const void*>(frame.depth.data()), static_cast<const void*>(frame.color.data())})
       EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % 64, 0u) << w << "x" << h;
+  }
+}
+
+// Buffers of at least 2 MiB (a 1920x1080 frame's) start on a 2 MiB page, and where Linux offers
+// transparent huge pages for advised memory, their mapping is eligible for them (the kernel's
+// THPeligible in /proc/self/smaps): the resolve's streaming stores then miss the TLB ~500 times
+// less often.
+TEST(Stream, LargeFrameBuffersAskForHugePages) {
+  Frame frame;
+  frame.allocate(1920, 1080);
+  const void* buffers[] = {frame.faceId.data(), frame.triangleId.data(), frame.depth.data(), frame.color.data()};
+  for (const void* p : buffers) EXPECT_EQ(reinterpret_cast<uintptr_t>(p) % detail::kHugePageBytes, 0u);
+  std::ifstream mode("/sys/kernel/mm/transparent_hugepage/enabled");
+  std::string modes;
+  std::getline(mode, modes);
+  if (modes.find("[never]") != std::string::npos || modes.empty()) return;  // (not offered: nothing to check)
+  for (const void* p : buffers) {
+    std::ifstream smaps("/proc/self/smaps");
+    std::string line;
+    bool inside = false, found = false;
+    while (std::getline(smaps, line)) {
+      uintptr_t begin = 0, end = 0;
+      char dash = 0;
+      std::istringstream range(line);
+      if (line.find(':') > line.find(' ') && (range >> std::hex >> begin >> dash >> end) && dash == '-') {
+        inside = reinterpret_cast<uintptr_t>(p) >= begin && reinterpret_cast<uintptr_t>(p) < end;
+        continue;
+      }
+      if (inside && line.rfind("THPeligible:", 0) == 0) {
+        EXPECT_NE(line.find('1'), std::string::npos) << line;
+        found = true;
+      }
+    }
+    EXPECT_TRUE(found) << "no THPeligible line for the buffer's mapping";
   }
 }
 

@@ -6,11 +6,34 @@
 #include <cstring>
 #include <limits>
 #include <nlohmann/json.hpp>
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "core/parallel.hpp"
 #include "core/stream_fill.hpp"
 
 namespace hsr {
+
+namespace detail {
+
+void* allocateBuffer(size_t bytes) {
+  if (bytes < kHugePageBytes) return ::operator new(bytes, std::align_val_t{64});
+  const size_t rounded = (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
+  if (rounded < bytes) throw std::bad_alloc();
+  void* p = ::operator new(rounded, std::align_val_t{kHugePageBytes});
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  madvise(p, rounded, MADV_HUGEPAGE);  // advice: its failure (no THP here) leaves ordinary pages
+#endif
+  return p;
+}
+
+void freeBuffer(void* p, size_t bytes) noexcept {
+  if (bytes < kHugePageBytes) ::operator delete(p, std::align_val_t{64});
+  else ::operator delete(p, std::align_val_t{kHugePageBytes});
+}
+
+}  // namespace detail
 
 void Stats::addTime(const std::string& stage, double ms) {
   for (auto& [k, v] : time_ms)
