@@ -399,6 +399,8 @@ void RasterizeTileT(const TileJob& job) {
   TileScratch& s = *job.scratch;
   RasterCounters count;  // added to the job's at the end
   uint64_t tests = 0, writes = 0;  // the hottest counts, plain locals so they stay in registers
+  // The blocks of the classified triangles' boxes, and those of them culled in classification.
+  uint64_t blocksInBoxes = 0, blocksCulledHere = 0;
   // The row loop's counts, per lane (summed at the end): CountIn per row instead of popcounts.
   hn::Vec<DU> rowTests = hn::Zero(du), rowWrites = hn::Zero(du);
   const Bins& bins = *job.bins;
@@ -670,6 +672,14 @@ void RasterizeTileT(const TileJob& job) {
     V colIn[kBlocksX][kVectors], colPX[kBlocksX][kVectors], colQX[kBlocksX][kVectors], colEdge[3][kBlocksX][kVectors];
     const V stepYV[3] = {hn::Set(d, double(e[0].stepY())), hn::Set(d, double(e[1].stepY())),
                          hn::Set(d, double(e[2].stepY()))};
+    // Per edge, in double (exact: |dx| < 2^24, |ay| < 2^23): dx, dx ay, dx ay + bias.
+    double edgeDx[3], edgeDxAy[3], edgeDxAyBias[3];
+    for (int i = 0; i < 3; ++i) {
+      edgeDx[i] = double(e[i].dx);
+      edgeDxAy[i] = double(e[i].dx * e[i].ay);
+      edgeDxAyBias[i] = double(e[i].dx * e[i].ay + e[i].bias);
+    }
+    if constexpr (kCountBlocks) blocksInBoxes += uint64_t(bxLast - bxFirst + 1) * uint64_t(ry1 / kBlockSize - ry0 / kBlockSize + 1);
     for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by) {
       // The row's blocks classified a vector of blocks at a time (lane: block column): skipped
       // when behind everything stored there, or outside an edge; in the triangle when inside
@@ -680,16 +690,18 @@ void RasterizeTileT(const TileJob& job) {
       // ax) with snapped coordinates below 2^23 in magnitude is below 2^49; E < bias is then
       // dx (py - ay) - bias < dy (px - ax), integers as well.
       const int cy0 = std::max(by * kBlockSize, ry0), cy1 = std::min(by * kBlockSize + kBlockSize - 1, ry1);
-      const int64_t top = centerFixed(y0 + cy0), bottom = centerFixed(y0 + cy1);
+      // (Each term exact in double, as is their difference: the integer the comment above names.)
+      const double top = double(centerFixed(y0 + cy0)), bottom = double(centerFixed(y0 + cy1));
       double yLargest[3], ySmallest[3];  // per edge: dx (py - ay) - bias at the rows that bound it
+      double rowEdge[3];  // per edge: dx (py - ay) at the first row of the blocks' parts of the box
       for (int i = 0; i < 3; ++i) {
-        yLargest[i] = double(e[i].dx * ((e[i].dx > 0 ? bottom : top) - e[i].ay) - e[i].bias);
-        ySmallest[i] = double(e[i].dx * ((e[i].dx > 0 ? top : bottom) - e[i].ay) - e[i].bias);
+        const double dxTop = edgeDx[i] * top, dxBottom = edgeDx[i] * bottom;
+        yLargest[i] = (e[i].dx > 0 ? dxBottom : dxTop) - edgeDxAyBias[i];
+        ySmallest[i] = (e[i].dx > 0 ? dxTop : dxBottom) - edgeDxAyBias[i];
+        rowEdge[i] = dxTop - edgeDxAy[i];
       }
       uint64_t visit = 0;  // bit bx: the block is drawn
       uint64_t insideEdge[3] = {};  // bit bx: every centre of the block's part of the box is inside edge i
-      double rowEdge[3];  // per edge: dx (py - ay) at the first row of the blocks' parts of the box
-      for (int i = 0; i < 3; ++i) rowEdge[i] = double(e[i].dx * (top - e[i].ay));
       for (size_t k = 0; k < size_t(kBlocksX); k += N) {
         const Mask inBox = hn::MaskFromVec(inBoxV[k / N]);
         if (hn::AllFalse(d, inBox)) continue;
@@ -715,10 +727,8 @@ void RasterizeTileT(const TileJob& job) {
         hn::StoreMaskBits(d, hn::AndNot(beaten, hn::AndNot(empty, inBox)), bits[0]);
         visit |= uint64_t(bits[0][0]) << k;
         for (int i = 0; i < 3; ++i) insideEdge[i] |= uint64_t(bits[1 + i][0]) << k;
-        if constexpr (kCountBlocks) {
-          count.blocksCulled += hn::CountTrue(d, hn::And(inBox, beaten));
-          count.blocksEmpty += hn::CountTrue(d, hn::AndNot(beaten, hn::And(inBox, empty)));
-        }
+        // (The empty blocks are counted at the end: the blocks of the boxes less those culled here and those visited.)
+        if constexpr (kCountBlocks) blocksCulledHere += hn::CountTrue(d, hn::And(inBox, beaten));
       }
       for (; visit; visit &= visit - 1) {
         const int bx = int(hwy::Num0BitsBelowLS1Bit_Nonzero64(visit));
@@ -902,6 +912,10 @@ void RasterizeTileT(const TileJob& job) {
     // Exact block bounds for the deferred back faces' test (tiled.cpp, selectLate).
     if (dirtyBlocks) refreshDirty();
     if (s.tileFarStale) refreshTileFar();
+  }
+  if constexpr (kCountBlocks) {
+    count.blocksCulled += blocksCulledHere;
+    count.blocksEmpty = blocksInBoxes - blocksCulledHere - count.blocksFull - count.blocksPartial;
   }
   count.depthTests = tests + hn::GetLane(hn::SumOfLanes(du, rowTests));
   count.depthWrites = writes + hn::GetLane(hn::SumOfLanes(du, rowWrites));
