@@ -679,7 +679,8 @@ void RasterizeTileT(const TileJob& job) {
       edgeDxAy[i] = double(e[i].dx * e[i].ay);
       edgeDxAyBias[i] = double(e[i].dx * e[i].ay + e[i].bias);
     }
-    if constexpr (kCountBlocks) blocksInBoxes += uint64_t(bxLast - bxFirst + 1) * uint64_t(ry1 / kBlockSize - ry0 / kBlockSize + 1);
+    if constexpr (kCountBlocks)
+      blocksInBoxes += uint64_t(bxLast - bxFirst + 1) * uint64_t(ry1 / kBlockSize - ry0 / kBlockSize + 1);
     for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by) {
       // The row's blocks classified a vector of blocks at a time (lane: block column): skipped
       // when behind everything stored there, or outside an edge; in the triangle when inside
@@ -727,7 +728,7 @@ void RasterizeTileT(const TileJob& job) {
         hn::StoreMaskBits(d, hn::AndNot(beaten, hn::AndNot(empty, inBox)), bits[0]);
         visit |= uint64_t(bits[0][0]) << k;
         for (int i = 0; i < 3; ++i) insideEdge[i] |= uint64_t(bits[1 + i][0]) << k;
-        // (The empty blocks are counted at the end: the blocks of the boxes less those culled here and those visited.)
+        // (Empty blocks are counted at the end: the boxes' blocks less those culled here and drawn.)
         if constexpr (kCountBlocks) blocksCulledHere += hn::CountTrue(d, hn::And(inBox, beaten));
       }
       for (; visit; visit &= visit - 1) {

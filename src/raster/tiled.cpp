@@ -148,6 +148,18 @@ HWY_INLINE void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, 
   }
 }
 
+// Whether the circle inscribed in triangle t (radius 2 area / perimeter, in subpixel units) is
+// narrower than `radius`. (Coordinates below 2^24 in magnitude: no square overflows; std::hypot's
+// care took 2.6% of random's occlusion buffer.)
+bool inscribedCircleBelow(const SetupTriangle& t, double radius) {
+  const double ux = double(t.x[1]) - t.x[0], uy = double(t.y[1]) - t.y[0];
+  const double vx = double(t.x[2]) - t.x[0], vy = double(t.y[2]) - t.y[0];
+  const double wx = double(t.x[2]) - t.x[1], wy = double(t.y[2]) - t.y[1];
+  const double twiceArea = std::abs(ux * vy - vx * uy);
+  const double perimeter = std::sqrt(ux * ux + uy * uy) + std::sqrt(vx * vx + vy * vy) + std::sqrt(wx * wx + wy * wy);
+  return twiceArea < radius * perimeter;
+}
+
 // Per tile, the nearest of the farthest bounds of the chunk's triangles that cover all of the
 // tile's pixel centres in the image (each edge's function at its smallest corner is inside; along
 // a row of tiles that corner moves monotonically, so the covered tiles are an interval of the
@@ -160,23 +172,13 @@ bool coverBounds(const SetupTriangles& tris, const DepthSetup& depth, int width,
   bool any = false;
   const int side = std::min({kTileSize, width, height});
   // A triangle that covers a side x side square of pixel centres holds its inscribed circle, of
-  // radius (side - 1) / 2 pixels: a triangle whose own inscribed circle (radius 2 area /
-  // perimeter) is smaller covers no such tile. (10,000 random triangles at 1920x1080: 3,061 of
+  // radius (side - 1) / 2 pixels: a triangle whose own inscribed circle is smaller covers no
+  // such tile. (10,000 random triangles at 1920x1080: 3,061 of
   // the 4,999 front faces have a box of 64 x 64 pixels or more, 625 of them a circle that wide;
   // this function was 2.5% of the time of their occlusion buffer, to cull 2 pairs.)
   const double minRadius = (side - 1) * 0.5 * double(kSubpixelOne) * (1 - 1e-9);  // (a margin for rounding)
   for (const SetupTriangle& t : tris) {
-    if (std::min(t.maxX - t.minX, t.maxY - t.minY) + 1 < side) continue;
-    {
-      const double ux = double(t.x[1]) - t.x[0], uy = double(t.y[1]) - t.y[0];
-      const double vx = double(t.x[2]) - t.x[0], vy = double(t.y[2]) - t.y[0];
-      const double wx = double(t.x[2]) - t.x[1], wy = double(t.y[2]) - t.y[1];
-      const double twiceArea = std::abs(ux * vy - vx * uy);
-      // (Coordinates below 2^24 in magnitude: no square overflows; std::hypot's care took 2.6%.)
-      const double perimeter =
-          std::sqrt(ux * ux + uy * uy) + std::sqrt(vx * vx + vy * vy) + std::sqrt(wx * wx + wy * wy);
-      if (twiceArea < minRadius * perimeter) continue;
-    }
+    if (std::min(t.maxX - t.minX, t.maxY - t.minY) + 1 < side || inscribedCircleBelow(t, minRadius)) continue;
     const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
     double far = 0;
     bool farKnown = false;  // computed for the first tile covered
