@@ -3,7 +3,7 @@
 // both see the same machine: on a shared VM whose speed drifts by 20-30% within minutes, runs
 // of separate processes one after the other compare the drift as much as the code.
 //   hsr_ab_env SCENE [--size WxH] [--threads N] [--frames N] [--depth-only] [--cull-back] [--var NAME]
-//              [--values A,B]
+//              [--values A,B] [--pause-ms MS]
 // Prints the median and minimum frame time of each value and the median of the per-pair ratios
 // B/A (each pair: one frame of each, in alternating order).
 #include <hsr/hsr.hpp>
@@ -14,12 +14,14 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <thread>
 #include <vector>
 
 int main(int argc, char** argv) {
   CLI::App app{"Interleaved A/B of an hsr environment variable, frame by frame"};
   std::string spec, size = "1920x1080", var = "HSR_DEFER_BACK_FACES", values = "off,on";
   int threads = 2, frames = 20;
+  double pauseMs = 0;
   bool depthOnly = false, cullBack = false;
   app.add_option("scene", spec, "Scene (file or builtin:NAME)")->required();
   app.add_option("--size", size, "Image size WxH");
@@ -31,6 +33,9 @@ int main(int argc, char** argv) {
   app.add_flag("--cull-back", cullBack, "Cull back faces (Cull::Back)");
   app.add_option("--var", var, "Environment variable");
   app.add_option("--values", values, "Its two values, A,B");
+  app.add_option("--pause-ms", pauseMs,
+                 "Sleep this long before each frame (the pool's threads fall asleep, as between the peer's frames)")
+      ->check(CLI::Range(0.0, 1000.0));
   CLI11_PARSE(app, argc, argv);
   const size_t comma = values.find(',');
   int w = 0, h = 0;
@@ -56,6 +61,7 @@ int main(int argc, char** argv) {
       for (int k = 0; k < 2; ++k) {
         const int which = i % 2 ? 1 - k : k;  // alternate which value goes first
         setenv(var.c_str(), value[which].c_str(), 1);
+        if (pauseMs > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(pauseMs));
         const auto t0 = std::chrono::steady_clock::now();
         hsr::render(scene, cam, o, frame[which]);
         t[which] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
