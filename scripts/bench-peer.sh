@@ -37,6 +37,7 @@ echo "size $size, $frames frames interleaved after at least 2 warm-up frames and
 log="$(mktemp)"
 trap 'rm -f "$log"' EXIT
 header_done=0
+rows=""
 for scene in builtin:sphere builtin:city "builtin:random?n=10000" "builtin:layers?n=64" builtin:cubes; do
   if ! row="$("$peer" "$scene" --size "$size" --frames "$frames" --threads "$threads" --raster "$raster" --outputs "$outputs" --markdown-row 2>"$log")"; then
     cat "$log" >&2
@@ -52,6 +53,12 @@ for scene in builtin:sphere builtin:city "builtin:random?n=10000" "builtin:layer
     header_done=1
   fi
   echo "$row"
+  rows+="$row"$'\n'
 done
+# The issue's first target is on the geometric mean of the five ratios (columns 8 and 11 of the
+# rows: depth + face + colour, and all four buffers).
 echo
+printf '%s' "$rows" | awk -F'|' '
+  { n++; a += log($8 + 0); b += log($11 + 0) }
+  END { if (n) printf "geometric mean of the %d ratios: %.2fx (all four buffers: %.2fx)\n", n, exp(a / n), exp(b / n) }'
 echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
