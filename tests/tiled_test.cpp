@@ -1129,6 +1129,54 @@ TEST(Tiled, ReusedFrameIsFullyOverwritten) {
   }
 }
 
+// The background of segments with nothing binned is streamed by the workers' pumps while they
+// rasterize the rest (zbuffer.cpp, tiled::BackgroundPump): a small object far off in a wide
+// frame whose rows do not start on cache lines (1000 and 1016 pixels wide: the pieces' partial
+// lines), rendered into a frame left full of other values, equals the reference for every set of
+// buffers and 1 to 3 threads, and the frame with the pumps turned off (HSR_BACKGROUND_PUMP=off).
+TEST(Tiled, PumpedBackgroundIsTheReferences) {
+  const Scene scene = loadScene("builtin:cubes");
+  const Bounds3 b = scene.bounds();
+  CameraSpec pose = frameBounds(b);
+  pose.eye = b.center() + (pose.eye - b.center()) * 6.0;  // the cubes in a few tiles of the middle
+  for (int width : {1000, 1016}) {
+    const Camera cam = resolveCamera(pose, width, 700, b);
+    RenderOptions ref;
+    ref.raster = RasterKind::HalfSpace;
+    ref.background = Rgba8{10, 20, 30, 255};
+    const Frame reference = render(scene, cam, ref);
+    ASSERT_GT(reference.stats.covered_pixels, 1000u);
+    ASSERT_LT(reference.stats.covered_pixels, uint64_t(width) * 700 / 8);  // most segments idle
+    for (FrameOutputs outputs : {FrameOutputs::All, FrameOutputs::FaceIds | FrameOutputs::Color, FrameOutputs::DepthOnly})
+      for (int threads : {1, 2, 3}) {
+        RenderOptions o = ref;
+        o.raster = RasterKind::Tiled;
+        o.outputs = outputs;
+        o.threads = threads;
+        Frame pumped, unpumped;
+        for (Frame* f : {&pumped, &unpumped}) {  // frames full of other values
+          f->allocate(cam.width, cam.height, outputs);
+          std::fill(f->depth.begin(), f->depth.end(), 1.5f);
+          std::fill(f->faceId.begin(), f->faceId.end(), 7);
+          std::fill(f->triangleId.begin(), f->triangleId.end(), 7);
+          std::fill(f->color.begin(), f->color.end(), Rgba8{1, 2, 3, 4});
+          if (f == &unpumped) setenv("HSR_BACKGROUND_PUMP", "off", 1);
+          render(scene, cam, o, *f);
+          unsetenv("HSR_BACKGROUND_PUMP");
+        }
+        const std::string what = fmt::format("width {}, outputs {}, threads {}", width, frameOutputsName(outputs), threads);
+        EXPECT_EQ(pumped.faceId, unpumped.faceId) << what;
+        EXPECT_EQ(pumped.triangleId, unpumped.triangleId) << what;
+        EXPECT_EQ(firstDifference(pumped.depth, unpumped.depth), -1) << what;
+        EXPECT_EQ(firstDifference(pumped.color, unpumped.color), -1) << what;
+        if (has(outputs, FrameOutputs::FaceIds)) EXPECT_EQ(pumped.faceId, reference.faceId) << what;
+        if (has(outputs, FrameOutputs::Color)) EXPECT_EQ(firstDifference(pumped.color, reference.color), -1) << what;
+        if (outputs != FrameOutputs::DepthOnly) EXPECT_EQ(firstDifference(pumped.depth, reference.depth), -1) << what;
+        EXPECT_EQ(pumped.stats.covered_pixels, reference.stats.covered_pixels) << what;
+      }
+  }
+}
+
 // Occlusion culling: each tile visits its triangles nearest first, so whatever the submission
 // order the layers behind the nearest are rejected tile by tile, with the reference's image;
 // the reference, in submission order, tests every fragment of layers drawn back to front.

@@ -23,7 +23,8 @@ constexpr size_t kWorkPerTile = kWorkPerThread;
 uint64_t TiledState::memoryBytes() const {
   uint64_t bytes = bins.memoryBytes() + scratch.size() * sizeof(tiled::TileScratch) +
                    counters.capacity() * sizeof(tiled::RasterCounters) + covered.capacity() * sizeof(uint64_t) +
-                   (unitOwner.capacity() + unitOrder.capacity()) * sizeof(uint32_t) +
+                   (unitOwner.capacity() + unitOrder.capacity() + busySegments.capacity() + idleSegments.capacity()) *
+                       sizeof(uint32_t) +
                    (unitBounds.capacity() + recordsByPart.capacity() + partRecords.capacity()) * sizeof(size_t);
   for (const tiled::TileOrder& order : orders) bytes += order.memoryBytes();
   return bytes;

@@ -28,6 +28,7 @@ struct TiledState {
   WorkQueue tileWork;                           // the tile pass's units, per worker (assignUnits)
   std::vector<uint32_t> unitOwner, unitOrder;   // scratch of assignUnits
   std::vector<size_t> unitBounds, recordsByPart, partRecords;
+  std::vector<uint32_t> busySegments, idleSegments;  // scratch of the z-buffer's tile pass (zbuffer.cpp)
   uint64_t memoryBytes() const;
 };
 

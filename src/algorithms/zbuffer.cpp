@@ -13,6 +13,7 @@
 //    frame that is never cleared separately. Bit-identical results, with less work: its
 //    depth_tests and depth_writes count what it did (fewer than the reference's).
 #include <algorithm>
+#include <bit>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -105,33 +106,119 @@ void drawReference(const std::vector<SetupTriangle>& tris, const Camera& cam, co
 constexpr int kSegmentTiles = 8;
 constexpr int kResolveBand = 8;
 
+// The background of a frame's idle segments (nothing binned in any of their tiles), shared by
+// the workers' pumps (tiled::BackgroundPump): each claims a whole segment and streams it, row by
+// row and buffer by buffer, a few lines at a time while it rasterizes other segments.
+struct IdleSegments {
+  const Frame* frame = nullptr;
+  uint32_t* buffers[4] = {};  // the frame's buffers of the outputs asked for ...
+  uint32_t values[4] = {};    // ... and their background values
+  int bufferCount = 0, segmentsX = 0;
+  const std::vector<uint32_t>* list = nullptr;
+  std::atomic<size_t> next{0};  // the next segment of `list` to claim
+};
+
+// The next piece of a pump's background: row cursor[1] of segment cursor[0] (-1: claim one), in
+// buffer cursor[2]. The parts of a row's first and last cache lines that the row shares with its
+// neighbours are written here with ordinary stores.
+bool nextIdlePiece(tiled::BackgroundPump& p) {
+  IdleSegments& idle = *static_cast<IdleSegments*>(p.context);
+  const Frame& frame = *idle.frame;
+  int& segment = p.cursor[0];
+  int& row = p.cursor[1];
+  int& buffer = p.cursor[2];
+  for (;;) {
+    if (segment < 0) {
+      const size_t i = idle.next.fetch_add(1, std::memory_order_relaxed);
+      if (i >= idle.list->size()) return false;
+      segment = int((*idle.list)[i]);
+      row = 0;
+      buffer = 0;
+    }
+    const int ty = segment / idle.segmentsX, tx0 = (segment % idle.segmentsX) * kSegmentTiles;
+    const int x0 = tx0 * tiled::kTileSize, x1 = std::min(x0 + kSegmentTiles * tiled::kTileSize, frame.width);
+    const int y = ty * tiled::kTileSize + row;
+    if (row >= tiled::kTileSize || y >= frame.height) {
+      segment = -1;
+      continue;
+    }
+    constexpr size_t kLine = 64 / sizeof(uint32_t);
+    uint32_t* start = idle.buffers[buffer] + frame.index(x0, y);
+    const uint32_t value = idle.values[buffer];
+    const size_t count = size_t(x1 - x0);
+    const size_t head = std::min(count, (kLine - reinterpret_cast<uintptr_t>(start) / sizeof(uint32_t) % kLine) % kLine);
+    const size_t lines = (count - head) / kLine;
+    for (size_t i = 0; i < head; ++i) start[i] = value;
+    for (size_t i = head + lines * kLine; i < count; ++i) start[i] = value;
+    p.dst = start + head;
+    p.lines = uint32_t(lines);
+    p.value = value;
+    if (++buffer == idle.bufferCount) buffer = 0, ++row;
+    if (lines) return true;
+  }
+}
+
 // Rasterizes and resolves the binned frame in segments of up to kSegmentTiles tiles of one
 // tile row: a worker rasterizes each tile of its segment into its own scratch, then resolves the
 // segment band by band across its tiles, so that the frame is written in long row pieces (see
 // tiled::resolveTile). Each tile has one owner, so no locks; counters are kept per tile and
-// summed in tile order.
+// summed in tile order. Segments with nothing binned are not units: the workers' pumps stream
+// their background while the others are rasterized (IdleSegments; off with
+// HSR_BACKGROUND_PUMP=off, the same bits) — cubes frame 0.91x the time with 2 threads, 0.87x
+// with one; random 0.99x; city, layers and sphere unchanged.
 void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const TriangleShader& shade, Frame& frame,
                TiledState& state, Counters& n, tiled::RasterCounters& total) {
   const tiled::Bins& bins = state.bins;
   const int segmentsX = (bins.tilesX + kSegmentTiles - 1) / kSegmentTiles;
-  const size_t segments = size_t(segmentsX) * size_t(bins.tilesY);
-  const int workers = std::min(prepareTilePass(state, resolveThreads(opt.threads)), int(segments));
+  const size_t allSegments = size_t(segmentsX) * size_t(bins.tilesY);
+  const int workers = std::min(prepareTilePass(state, resolveThreads(opt.threads)), int(allSegments));
   if (state.scratch.size() < size_t(workers) * kSegmentTiles) state.scratch.resize(size_t(workers) * kSegmentTiles);
   const bool ids = opt.outputs != FrameOutputs::DepthOnly;
-  assignUnits(state, workers, segments, [&](size_t seg) {
+  std::vector<uint32_t>& busy = state.busySegments;
+  std::vector<uint32_t>& idleList = state.idleSegments;
+  busy.clear();
+  idleList.clear();
+  const bool pump = !switchedOff("HSR_BACKGROUND_PUMP");
+  for (size_t seg = 0; seg < allSegments; ++seg) {
     const int ty = int(seg) / segmentsX, tx0 = (int(seg) % segmentsX) * kSegmentTiles;
+    bool idle = pump;
+    for (int t = ty * bins.tilesX + tx0, end = t + std::min(kSegmentTiles, bins.tilesX - tx0); idle && t < end; ++t)
+      idle = bins.entries(t) == 0 && bins.entries(t, true) == 0;
+    (idle ? idleList : busy).push_back(uint32_t(seg));
+  }
+  IdleSegments idle;
+  idle.frame = &frame;
+  idle.segmentsX = segmentsX;
+  idle.list = &idleList;
+  auto addBuffer = [&](void* buffer, uint32_t value) {
+    idle.buffers[idle.bufferCount] = static_cast<uint32_t*>(buffer);
+    idle.values[idle.bufferCount++] = value;
+  };
+  addBuffer(frame.depth.data(), std::bit_cast<uint32_t>(std::numeric_limits<float>::infinity()));
+  if (has(opt.outputs, FrameOutputs::FaceIds)) addBuffer(frame.faceId.data(), std::bit_cast<uint32_t>(int32_t(-1)));
+  if (has(opt.outputs, FrameOutputs::TriangleIds))
+    addBuffer(frame.triangleId.data(), std::bit_cast<uint32_t>(int32_t(-1)));
+  if (has(opt.outputs, FrameOutputs::Color)) addBuffer(frame.color.data(), std::bit_cast<uint32_t>(opt.background));
+  const size_t units = busy.size();
+  assignUnits(state, workers, units, [&](size_t unit) {
+    const int ty = int(busy[unit]) / segmentsX, tx0 = (int(busy[unit]) % segmentsX) * kSegmentTiles;
     return std::pair(ty * bins.tilesX + tx0, std::min(kSegmentTiles, bins.tilesX - tx0));
   });
   parallelFor(0, size_t(workers), workers, [&](size_t worker) {
     tiled::TileScratch* scratch = state.scratch.data() + worker * kSegmentTiles;
     const size_t part = currentPart();  // (segments whose records this thread set up come first)
-    for (size_t seg = state.tileWork.next(part), following = 0; seg < segments; seg = following) {
-      const int ty = int(seg) / segmentsX, tx0 = (int(seg) % segmentsX) * kSegmentTiles;
+    tiled::BackgroundPump background;
+    background.done = idleList.empty();
+    background.refill = nextIdlePiece;
+    background.context = &idle;
+    for (size_t unit = state.tileWork.next(part), following = 0; unit < units; unit = following) {
+      const int ty = int(busy[unit]) / segmentsX, tx0 = (int(busy[unit]) % segmentsX) * kSegmentTiles;
       const int count = std::min(kSegmentTiles, bins.tilesX - tx0), first = ty * bins.tilesX + tx0;
       for (int i = 0; i < count; ++i) {
         tiled::rasterizeTile(bins, first + i, depth, ids, scratch[i], state.orders[worker],
-                             state.counters[size_t(first + i)]);
-        if (ids) tiled::prepareResolve(bins, first + i, opt.outputs, &shade, opt.background, scratch[i]);
+                             state.counters[size_t(first + i)], false, &background);
+        if (ids)
+          tiled::prepareResolve(bins, first + i, opt.outputs, &shade, opt.background, scratch[i], &background);
       }
       // The next segment is claimed before this one's frame writes: a locked read-modify-write
       // waits until every streaming store before it has drained to memory (claimed after them,
@@ -143,6 +230,7 @@ void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const Triangle
           state.covered[size_t(first + i)] += tiled::resolveTile(bins, first + i, depth, opt.outputs, &shade,
                                                                  opt.background, scratch[i], frame, row, row + kResolveBand);
     }
+    tiled::drainBackground(background);  // (the idle segments no pump has claimed yet, too)
     tiled::finishResolves();
   });
   for (int tile = 0; tile < bins.tileCount(); ++tile) {

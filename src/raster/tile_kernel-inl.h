@@ -55,6 +55,7 @@ namespace hn = hwy::HWY_NAMESPACE;
 
 using hsr::stream::HWY_NAMESPACE::StreamCopy;
 using hsr::stream::HWY_NAMESPACE::StreamFill;
+using hsr::stream::HWY_NAMESPACE::kLineValues;
 
 using D = hn::CappedTag<double, kBlockSize>;  // at most one block row per vector
 using V = hn::Vec<D>;
@@ -72,6 +73,32 @@ HWY_INLINE hn::Vec<DU> CountIn(hn::Vec<DU> acc, Mask m) {
 #else
   return hn::Sub(acc, hn::BitCast(DU(), hn::VecFromMask(D(), m)));
 #endif
+}
+
+// Streams up to k lines of the pump's background (BackgroundPump; none without one), refilling
+// as it goes.
+HWY_INLINE void Pump(BackgroundPump* p, uint32_t k) {
+  if (!p || p->done) return;
+  const hn::ScalableTag<uint32_t> du32;
+  const size_t L = hn::Lanes(du32);
+  while (k) {
+    if (p->lines == 0 && !p->refill(*p)) {
+      p->done = true;
+      return;
+    }
+    const uint32_t n = std::min(k, p->lines);
+    const auto v = hn::Set(du32, p->value);
+    uint32_t* dst = p->dst;
+    for (uint32_t i = 0; i < n; ++i, dst += kLineValues)
+      for (size_t j = 0; j < kLineValues; j += L) hn::Stream(v, du32, dst + j);
+    p->dst = dst;
+    p->lines -= n;
+    k -= n;
+  }
+}
+// drainBackground (tiled.hpp).
+void DrainPump(BackgroundPump& p) {
+  while (!p.done) Pump(&p, 1u << 30);
 }
 
 // "a is nearer than b" for the format's compare direction.
@@ -701,6 +728,7 @@ void RasterizeTileT(const TileJob& job) {
         ySmallest[i] = (e[i].dx > 0 ? dxTop : dxBottom) - edgeDxAyBias[i];
         rowEdge[i] = dxTop - edgeDxAy[i];
       }
+      Pump(job.pump, kPumpPerBlockRow);
       uint64_t visit = 0;  // bit bx: the block is drawn
       uint64_t insideEdge[3] = {};  // bit bx: every centre of the block's part of the box is inside edge i
       for (size_t k = 0; k < size_t(kBlocksX); k += N) {
@@ -779,6 +807,7 @@ void RasterizeTileT(const TileJob& job) {
             s.blockNear[b] = r.nearest;
             if (storedNearer<M>(r.nearest, s.tileNear)) s.tileNear = r.nearest;
             dirtyBlocks &= ~(uint64_t(1) << b);  // its pixel buffers are no longer its values
+            Pump(job.pump, kPumpPerWholeBlock);
             continue;
           }
         }
@@ -883,6 +912,7 @@ void RasterizeTileT(const TileJob& job) {
         };
         if (unclamped) drawRowsFor(std::true_type());
         else drawRowsFor(std::false_type());
+        Pump(job.pump, kPumpPerBlock);
         if (!hn::AllTrue(du, hn::Eq(rowWrites, writesBefore))) {
           // The block's rows outside the triangle's box kept their values.
           for (int y = by * kBlockSize; y < (by + 1) * kBlockSize; ++y) {
@@ -1118,6 +1148,7 @@ void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
   for (int b = 0; b < kBlocksPerTile; ++b) {
     const int bx = (b % kBlocksX) * kBlockSize, by = (b / kBlocksX) * kBlockSize;
     if (Lazy(s, b) || bx >= w || by >= h) continue;
+    Pump(job.pump, kPumpPerPreparedBlock);
     // One key in every cell (those outside the image hold 0): the block is that triangle's plane
     // (every value is its fragment's, bit for bit) or empty, resolved from that alone.
     const uint64_t only = s.triangle[size_t(by) * kTileSize + size_t(bx)];

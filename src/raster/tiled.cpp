@@ -32,6 +32,7 @@ HWY_EXPORT(PrepareResolve);
 HWY_EXPORT(KernelTarget);
 HWY_EXPORT(FlushStreams);
 HWY_EXPORT(StoreTile);
+HWY_EXPORT(DrainPump);
 
 void Bins::countEntries() {
   const size_t tiles = size_t(tileCount());
@@ -638,9 +639,9 @@ void selectLate(const Bins& bins, int tile, const DepthSetup& depth, bool ids, c
 }  // namespace
 
 void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids, TileScratch& scratch,
-                   TileOrder& order, RasterCounters& counters, bool keep) {
+                   TileOrder& order, RasterCounters& counters, bool keep, BackgroundPump* pump) {
   const bool late = bins.entries(tile, true) > 0;
-  TileJob job{&bins, tile, depth, ids, &scratch, &counters, nullptr, &order, late ? TileJob::Pass::Front : TileJob::Pass::Whole, keep};
+  TileJob job{&bins, tile, depth, ids, &scratch, &counters, nullptr, &order, late ? TileJob::Pass::Front : TileJob::Pass::Whole, keep, pump};
   HWY_DYNAMIC_DISPATCH(RasterizeTile)(job);
   if (!late) return;
   selectLate(bins, tile, depth, ids, scratch, order, counters);
@@ -650,8 +651,9 @@ void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids
 }
 
 void prepareResolve(const Bins& bins, int tile, FrameOutputs outputs, const TriangleShader* shader, Rgba8 background,
-                    TileScratch& scratch) {
-  const TileJob job{&bins, tile, DepthSetup{}, true, &scratch, nullptr, shader, nullptr};  // (depth: not read)
+                    TileScratch& scratch, BackgroundPump* pump) {
+  TileJob job{&bins, tile, DepthSetup{}, true, &scratch, nullptr, shader, nullptr};  // (depth: not read)
+  job.pump = pump;
   HWY_DYNAMIC_DISPATCH(PrepareResolve)(job, outputs, background);
 }
 
@@ -757,6 +759,7 @@ bool anyFarther(const Bins& bins, int tile, const DepthSetup& depth, const KeptT
 const char* kernelTarget() { return HWY_DYNAMIC_DISPATCH(KernelTarget)(); }
 
 void finishResolves() { HWY_DYNAMIC_DISPATCH(FlushStreams)(); }
+void drainBackground(BackgroundPump& pump) { HWY_DYNAMIC_DISPATCH(DrainPump)(pump); }
 
 void storeTile(const TileScratch& from, const DepthSetup& depth, KeptTile& to) {
   HWY_DYNAMIC_DISPATCH(StoreTile)(from, depth, to);
