@@ -119,8 +119,7 @@ struct IdleSegments {
 };
 
 // The next piece of a pump's background: row cursor[1] of segment cursor[0] (-1: claim one), in
-// buffer cursor[2]. The parts of a row's first and last cache lines that the row shares with its
-// neighbours are written here with ordinary stores.
+// buffer cursor[2].
 bool nextIdlePiece(tiled::BackgroundPump& p) {
   IdleSegments& idle = *static_cast<IdleSegments*>(p.context);
   const Frame& frame = *idle.frame;
@@ -142,17 +141,7 @@ bool nextIdlePiece(tiled::BackgroundPump& p) {
       segment = -1;
       continue;
     }
-    constexpr size_t kLine = 64 / sizeof(uint32_t);
-    uint32_t* start = idle.buffers[buffer] + frame.index(x0, y);
-    const uint32_t value = idle.values[buffer];
-    const size_t count = size_t(x1 - x0);
-    const size_t head = std::min(count, (kLine - reinterpret_cast<uintptr_t>(start) / sizeof(uint32_t) % kLine) % kLine);
-    const size_t lines = (count - head) / kLine;
-    for (size_t i = 0; i < head; ++i) start[i] = value;
-    for (size_t i = head + lines * kLine; i < count; ++i) start[i] = value;
-    p.dst = start + head;
-    p.lines = uint32_t(lines);
-    p.value = value;
+    const bool lines = p.setPiece(idle.buffers[buffer] + frame.index(x0, y), size_t(x1 - x0), idle.values[buffer]);
     if (++buffer == idle.bufferCount) buffer = 0, ++row;
     if (lines) return true;
   }

@@ -14,6 +14,7 @@
 #include "raster/tile_kernel-inl.h"
 
 #if HWY_ONCE
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -760,6 +761,18 @@ const char* kernelTarget() { return HWY_DYNAMIC_DISPATCH(KernelTarget)(); }
 
 void finishResolves() { HWY_DYNAMIC_DISPATCH(FlushStreams)(); }
 void drainBackground(BackgroundPump& pump) { HWY_DYNAMIC_DISPATCH(DrainPump)(pump); }
+
+bool BackgroundPump::setPiece(uint32_t* start, size_t count, uint32_t fill) {
+  constexpr size_t kLine = stream::HWY_NAMESPACE::kLineValues;
+  const size_t head = std::min(count, (kLine - reinterpret_cast<uintptr_t>(start) / sizeof(uint32_t) % kLine) % kLine);
+  const size_t whole = (count - head) / kLine;
+  std::fill(start, start + head, fill);
+  std::fill(start + head + whole * kLine, start + count, fill);
+  dst = start + head;
+  lines = uint32_t(whole);
+  value = fill;
+  return whole > 0;
+}
 
 void storeTile(const TileScratch& from, const DepthSetup& depth, KeptTile& to) {
   HWY_DYNAMIC_DISPATCH(StoreTile)(from, depth, to);

@@ -436,8 +436,8 @@ bool anyFarther(const Bins& bins, int tile, const DepthSetup& depth, const KeptT
 /// times, while a few lines after each small piece of work drain while the core computes (a
 /// loop on this project's Intel VM: 0.50 ms for 0.43 ms of arithmetic and the 25 MB of a frame
 /// to stream, against 0.63 ms in bursts of a band). The current piece is `lines` whole lines of
-/// `value` from `dst`; refill(*this) sets the next piece (the owner's state in `context` and
-/// `cursor`) or returns false when nothing is left (then `done`).
+/// `value` from `dst`; refill(*this) sets the next piece with setPiece (the owner's state in
+/// `context` and `cursor`) or returns false when nothing is left (then `done`).
 struct BackgroundPump {
   uint32_t* dst = nullptr;
   uint32_t value = 0;
@@ -446,6 +446,10 @@ struct BackgroundPump {
   bool (*refill)(BackgroundPump&) = nullptr;
   void* context = nullptr;
   int cursor[3] = {-1, 0, 0};
+  /// The next piece: start[i] = value for i < count. The parts of its first and last cache lines
+  /// that it may share with its neighbours are written here with ordinary stores; the whole lines
+  /// between them are left to the pump. Returns whether there are any.
+  bool setPiece(uint32_t* start, size_t count, uint32_t value);
 };
 /// Lines the kernel streams from its pump after each block it makes a triangle's plane whole,
 /// each block it draws row by row, each block row it classifies, and each block prepareResolve
