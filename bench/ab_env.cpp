@@ -2,8 +2,8 @@
 // reads per frame (HSR_DEFER_BACK_FACES, HSR_DEFER_CLUSTERS), interleaved frame by frame in one process, so that
 // both see the same machine: on a shared VM whose speed drifts by 20-30% within minutes, runs
 // of separate processes one after the other compare the drift as much as the code.
-//   hsr_ab_env SCENE [--size WxH] [--threads N] [--frames N] [--depth-only] [--cull-back] [--var NAME]
-//              [--values A,B] [--pause-ms MS]
+//   hsr_ab_env SCENE [--size WxH] [--threads N] [--frames N] [--depth-only] [--cull-back] [--occlusion]
+//              [--var NAME] [--values A,B] [--pause-ms MS]
 // Prints the median and minimum frame time of each value and the median of the per-pair ratios
 // B/A (each pair: one frame of each, in alternating order).
 #include <hsr/hsr.hpp>
@@ -22,7 +22,7 @@ int main(int argc, char** argv) {
   std::string spec, size = "1920x1080", var = "HSR_DEFER_BACK_FACES", values = "off,on";
   int threads = 2, frames = 20;
   double pauseMs = 0;
-  bool depthOnly = false, cullBack = false;
+  bool depthOnly = false, cullBack = false, occlusion = false;
   app.add_option("scene", spec, "Scene (file or builtin:NAME)")->required();
   app.add_option("--size", size, "Image size WxH");
   app.add_option("--threads", threads, "Worker threads");
@@ -31,6 +31,8 @@ int main(int argc, char** argv) {
   app.add_flag("--depth-only", depthOnly, "Depth only (FrameOutputs::DepthOnly)");
   app.add_option("--outputs", outputs, "Buffers resolved, as hsr bench --outputs (default all)");
   app.add_flag("--cull-back", cullBack, "Cull back faces (Cull::Back)");
+  app.add_flag("--occlusion", occlusion,
+               "Time hsr::OcclusionBuffer::render (depth kept in tiles, no image), as hsr bench --occlusion");
   app.add_option("--var", var, "Environment variable");
   app.add_option("--values", values, "Its two values, A,B");
   app.add_option("--pause-ms", pauseMs,
@@ -55,6 +57,8 @@ int main(int argc, char** argv) {
     if (depthOnly) o.outputs = hsr::FrameOutputs::DepthOnly;
     if (cullBack) o.cull = hsr::Cull::Back;
     hsr::Frame frame[2];
+    hsr::OcclusionBuffer buffer[2];
+    const hsr::OcclusionOptions occlusionOptions{o.depthFormat, o.cull, o.threads};
     std::vector<double> ms[2], ratio;
     for (int i = 0; i < frames + 2; ++i) {
       double t[2];
@@ -63,7 +67,8 @@ int main(int argc, char** argv) {
         setenv(var.c_str(), value[which].c_str(), 1);
         if (pauseMs > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(pauseMs));
         const auto t0 = std::chrono::steady_clock::now();
-        hsr::render(scene, cam, o, frame[which]);
+        if (occlusion) buffer[which].render(scene, cam, occlusionOptions);
+        else hsr::render(scene, cam, o, frame[which]);
         t[which] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       }
       if (i < 2) continue;
