@@ -660,7 +660,8 @@ void RasterizeTileT(const TileJob& job) {
     // bounds over each block's part of the box in the classification below, a vector of blocks
     // at a time (the lanes repeat storedRangeOverRect's operations: the same bits).
     const bool rectBounds = m.affine && pErr < 1e280;
-    HWY_ALIGN double rectNearest[kBlocksX], rectFarthest[kBlocksX];
+    constexpr int kBlockRows = kTileSize / kBlockSize;
+    HWY_ALIGN double rectNearestRows[kBlockRows][kBlocksX], rectFarthestRows[kBlockRows][kBlocksX];
     // What the classification below needs of each vector of block columns (lane: block column)
     // that does not depend on the block row, computed once: whether the column meets the box,
     // P's a X at the corners of the columns' parts of the box that bound it, and the edge
@@ -708,7 +709,16 @@ void RasterizeTileT(const TileJob& job) {
     }
     if constexpr (kCountBlocks)
       blocksInBoxes += uint64_t(bxLast - bxFirst + 1) * uint64_t(ry1 / kBlockSize - ry0 / kBlockSize + 1);
-    for (int by = ry0 / kBlockSize; by <= ry1 / kBlockSize; ++by) {
+    // The box's block rows are all classified first, then visited row by row. A row's
+    // classification is a long chain of dependent operations (its plane bounds alone about
+    // ten), and classified just before its visits every row waited on the one before through
+    // the visit loop's branches; classified ahead, the rows' chains overlap. Only this
+    // triangle's visits write the blocks it classifies, each block once, so every block reads
+    // the same values classified ahead as just before its visit: the same blocks are drawn.
+    const int byFirst = ry0 / kBlockSize, byLast = ry1 / kBlockSize;
+    uint64_t visitRows[kBlockRows], insideRows[kBlockRows][3];
+    double rowEdgeRows[kBlockRows][3];
+    for (int by = byFirst; by <= byLast; ++by) {
       // The row's blocks classified a vector of blocks at a time (lane: block column): skipped
       // when behind everything stored there, or outside an edge; in the triangle when inside
       // all three. Each block's part of the box has four corner centres that bound every edge
@@ -721,16 +731,16 @@ void RasterizeTileT(const TileJob& job) {
       // (Each term exact in double, as is their difference: the integer the comment above names.)
       const double top = double(centerFixed(y0 + cy0)), bottom = double(centerFixed(y0 + cy1));
       double yLargest[3], ySmallest[3];  // per edge: dx (py - ay) - bias at the rows that bound it
-      double rowEdge[3];  // per edge: dx (py - ay) at the first row of the blocks' parts of the box
+      double* rowEdge = rowEdgeRows[by];  // per edge: dx (py - ay) at the first row of the blocks' parts of the box
       for (int i = 0; i < 3; ++i) {
         const double dxTop = edgeDx[i] * top, dxBottom = edgeDx[i] * bottom;
         yLargest[i] = (e[i].dx > 0 ? dxBottom : dxTop) - edgeDxAyBias[i];
         ySmallest[i] = (e[i].dx > 0 ? dxTop : dxBottom) - edgeDxAyBias[i];
         rowEdge[i] = dxTop - edgeDxAy[i];
       }
-      Pump(job.pump, kPumpPerBlockRow);
-      uint64_t visit = 0;  // bit bx: the block is drawn
-      uint64_t insideEdge[3] = {};  // bit bx: every centre of the block's part of the box is inside edge i
+      uint64_t& visit = visitRows[by];  // bit bx: the block is drawn
+      uint64_t* insideEdge = insideRows[by];  // bit bx: every centre of the block's part of the box is inside edge i
+      visit = insideEdge[0] = insideEdge[1] = insideEdge[2] = 0;
       for (size_t k = 0; k < size_t(kBlocksX); k += N) {
         const Mask inBox = hn::MaskFromVec(inBoxV[k / N]);
         if (hn::AllFalse(d, inBox)) continue;
@@ -742,8 +752,8 @@ void RasterizeTileT(const TileJob& job) {
         if (rectBounds) {
           const StoredRangeV r = RectRange<S, M>(m, pErr, pXLow[k / N], pXHigh[k / N], double(y0 + cy0) + 0.5,
                                                  double(y0 + cy1) + 0.5);
-          hn::Store(r.nearest, d, rectNearest + k);
-          hn::Store(r.farthest, d, rectFarthest + k);
+          hn::Store(r.nearest, d, rectNearestRows[by] + k);
+          hn::Store(r.farthest, d, rectFarthestRows[by] + k);
           nearestIn = Farther<kGreater>(qNearV, r.nearest);
         }
         const Mask beaten = kIds ? Nearer<kGreater>(far, nearestIn) : hn::Not(Nearer<kGreater>(nearestIn, far));
@@ -759,6 +769,15 @@ void RasterizeTileT(const TileJob& job) {
         // (Empty blocks are counted at the end: the boxes' blocks less those culled here and drawn.)
         if constexpr (kCountBlocks) blocksCulledHere += hn::CountTrue(d, hn::And(inBox, beaten));
       }
+    }
+    for (int by = byFirst; by <= byLast; ++by) {
+      const int cy0 = std::max(by * kBlockSize, ry0), cy1 = std::min(by * kBlockSize + kBlockSize - 1, ry1);
+      const uint64_t* insideEdge = insideRows[by];
+      const double* rowEdge = rowEdgeRows[by];
+      const double* rectNearest = rectNearestRows[by];
+      const double* rectFarthest = rectFarthestRows[by];
+      Pump(job.pump, kPumpPerBlockRow);
+      uint64_t visit = visitRows[by];
       for (; visit; visit &= visit - 1) {
         const int bx = int(hwy::Num0BitsBelowLS1Bit_Nonzero64(visit));
         const int b = by * kBlocksX + bx;
