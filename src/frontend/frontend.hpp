@@ -124,14 +124,19 @@ inline constexpr size_t kChunkTriangles = 1 << 12;
 /// The fewest scene triangles per chunk (chunkTrianglesFor), a multiple of kClusterTriangles.
 inline constexpr size_t kMinChunkTriangles = 256;
 /// Scene triangles per chunk for a scene of `triangles`: kChunkTriangles, or fewer (down to
-/// kMinChunkTriangles) so that a scene of under 64K triangles still has about 16 chunks — a
-/// chunk is set up and binned by one thread, and 10,000 triangles in 3 chunks of 4096 kept one
-/// of two threads waiting a third of the time. (A minimum of 256 rather than 1024, 16 chunks of
-/// 640 for 10,000 triangles instead of 10 of 1024: random --occlusion --cull back 1.03-1.06x,
-/// its frame 1.05x.) A function of the scene only, never of the thread count: binning culls
-/// within a chunk, so the statistics would depend on it.
+/// kMinChunkTriangles) so that a scene of under 16K triangles still has about 4 chunks — a chunk
+/// is set up and binned by one thread, and 10,000 triangles in 3 chunks of 4096 kept one of two
+/// threads waiting a third of the time. Not more: every tile merges the lists of every chunk
+/// binned to it (orderTile), a cost per chunk and tile. On the Intel Xeon of the thirty-ninth
+/// session, 4 chunks against 16 (one process alternating them, B/A): random 10,000
+/// --occlusion --cull back 0.961 (1 thread 0.974), its frame 0.991, at 640x480 0.945; random
+/// 5,000 0.952; city at 640x480 0.978, its occlusion buffer 1.004; 8 chunks gave 0.972 and 32
+/// gave 1.026. (The Zen 3 of the thirty-second session preferred 16 to 10: 1.03-1.06x.) A
+/// function of the scene only, never of the thread count: binning culls within a chunk, so the
+/// statistics would depend on it. (Machines with more cores get no more front-end threads than
+/// chunks: under 16K triangles, 4.)
 inline size_t chunkTrianglesFor(size_t triangles) {
-  constexpr size_t kChunks = 16;
+  constexpr size_t kChunks = 4;
   static_assert(kMinChunkTriangles % kClusterTriangles == 0 && kChunkTriangles % kClusterTriangles == 0);
   const size_t per = (triangles / kChunks + kClusterTriangles - 1) / kClusterTriangles * kClusterTriangles;
   return std::clamp(per, kMinChunkTriangles, kChunkTriangles);
