@@ -833,7 +833,31 @@ void RasterizeTileT(const TileJob& job) {
             continue;
           }
         }
-        if (Lazy(s, b)) MaterializeBlock<S, M, kIds>(job, tf, b, reciprocal);
+        // A cleared block (wholly in the image) is written only where the triangle's rows do
+        // not reach: the rows drawn below start from the clear value (key 0) without reading it,
+        // and store every column — MaterializeBlock's values, without writing those rows twice
+        // (in one process against materializing first: random --occlusion --cull back 0.990x
+        // the time, 0.996x on one thread; city 0.986x, its frame 0.994x; sphere 0.987x; cubes
+        // frame 0.994x; layers 0.997x).
+        bool fromClear = false;
+        if (Lazy(s, b)) {
+          if (s.blockClear[b]) {
+            fromClear = true;
+            const V clearV = hn::Set(d, tf.clear);
+            for (int y = by * kBlockSize; y < (by + 1) * kBlockSize; ++y) {
+              if (y == cy0) y = cy1 + 1;
+              if (y >= (by + 1) * kBlockSize) break;
+              for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+                const size_t at = size_t(y) * kTileSize + size_t(bx * kBlockSize) + k;
+                hn::Store(clearV, d, s.depth + at);
+                if constexpr (kIds) hn::Store(hn::Zero(du), du, s.triangle + at);
+              }
+            }
+            s.blockClear[b] = false;
+          } else {
+            MaterializeBlock<S, M, kIds>(job, tf, b, reciprocal);
+          }
+        }
 
         const int bxPixel = bx * kBlockSize;  // tile-local x of the block's first column
         // Per vector of the block's row (k / N): its columns in the box, a X of both planes
@@ -892,7 +916,7 @@ void RasterizeTileT(const TileJob& job) {
             const V pY = hn::Set(d, m.p.b * Y);
             for (size_t k = 0; k < size_t(kBlockSize); k += N) {
               const size_t at = size_t(y) * kTileSize + size_t(bxPixel) + k;
-              const V stored = hn::Load(d, s.depth + at);
+              const V stored = fromClear ? hn::Set(d, tf.clear) : hn::Load(d, s.depth + at);
               V result = stored;
               Mask cover = hn::MaskFromVec(columnIn[k / N]);
               for (int i = 0; i < kEdges; ++i) {
@@ -910,7 +934,7 @@ void RasterizeTileT(const TileJob& job) {
                                                        : StoredDepthAt<S, kUnclamped>(m, pX[k / N], pY, qX[k / N], Y);
               Mask win = hn::And(cover, Nearer<kGreater>(z, stored));
               if constexpr (kIds) {  // a tie goes to the triangle submitted first
-                const auto old = hn::Load(du, s.triangle + at);
+                const auto old = fromClear ? hn::Zero(du) : hn::Load(du, s.triangle + at);
                 const Mask tie = hn::And(hn::Eq(z, stored), hn::RebindMask(d, hn::Lt(hn::BitCast(di, idV), hn::BitCast(di, old))));
                 win = hn::Or(win, hn::And(cover, tie));
                 hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
