@@ -16,12 +16,9 @@ cd "$(dirname "$0")/.."
 rounds="${1:-5}"
 frames="${2:-15}"
 threads="${THREADS:-2}"
-hsr="${HSR:-build/hsr}"
-[ -x "$hsr" ] || scripts/build.sh >/dev/null
-command -v python3 >/dev/null || scripts/install-deps.sh python3
+source scripts/bench-common.sh  # hsr (HSR, built when missing), python3, bench_header
 
-echo "date: $(date -u '+%Y-%m-%d %H:%M UTC'); commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
-echo "cpu: $(grep -m1 "model name" /proc/cpuinfo | cut -d: -f2- | sed "s/^ //"), $(nproc) cores"
+bench_header
 echo "size 1920x1080, $rounds alternating rounds of $frames frames (after at least 2 warm-up frames and 1 s), --threads $threads, depth f32:reversed"
 echo
 echo "| scene | triangles | depth image ms | occlusion buffer ms | occlusion buffer, back faces culled, ms | MOC ms (issue's figure, 1 thread) | target ms |"

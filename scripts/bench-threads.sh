@@ -13,12 +13,9 @@ rounds="${1:-2}"
 frames="${2:-1500}"
 threads="${THREADS:-2}"
 sizes="${SIZES:-64x48 160x120}"
-hsr="${HSR:-build/hsr}"
-[ -x "$hsr" ] || scripts/build.sh >/dev/null
-command -v python3 >/dev/null || scripts/install-deps.sh python3
+source scripts/bench-common.sh  # hsr (HSR, built when missing), python3, bench_header
 
-echo "date: $(date -u '+%Y-%m-%d %H:%M UTC'); commit: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
-echo "cpu: $(grep -m1 "model name" /proc/cpuinfo | cut -d: -f2- | sed "s/^ //"), $(nproc) cores"
+bench_header
 echo "$rounds alternating rounds of $frames frames (after at least 1 s of warm-up); microseconds, the lower median of the rounds"
 echo
 echo "| scene | size | mode | 1 thread | $threads threads | ratio |"
