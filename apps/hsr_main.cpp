@@ -1,7 +1,7 @@
-// The `hsr` command line: a table of subcommands (render, bench, scenes, info, help), each its
-// own function with its own flags and help; docs/cli.md documents them. Used by people and by
-// the scripts that compare hsr with other renderers, so flags, output files and exit status
-// follow ../shared/CONVENTIONS.md "Command line": 0 success, 2 bad usage or input, 1 otherwise.
+// The `hsr` command line: a table of subcommands (render, bench, algorithms, scenes, info, help),
+// each its own function with its own flags and help; docs/cli.md documents them. Used by people
+// and by the scripts that compare hsr with other renderers, so flags, output files and exit
+// status follow docs/conventions.md "Command line": 0 success, 2 bad usage or input, 1 otherwise.
 #include <hsr/hsr.hpp>
 
 #include "core/parallel.hpp"
@@ -112,8 +112,6 @@ const CLI::Validator kPositive(
 
 template <class Enum>
 using Names = std::vector<std::pair<std::string, Enum>>;
-const Names<hsr::RasterKind> kRasterNames{
-    {"tiled", hsr::RasterKind::Tiled}, {"halfspace", hsr::RasterKind::HalfSpace}, {"scanline", hsr::RasterKind::Scanline}};
 const Names<hsr::Cull> kCullNames{{"none", hsr::Cull::None}, {"back", hsr::Cull::Back}, {"front", hsr::Cull::Front}};
 const Names<hsr::Shading> kShadingNames{
     {"lambert", hsr::Shading::Lambert}, {"flat", hsr::Shading::Flat}, {"faceid", hsr::Shading::FaceId}};
@@ -158,7 +156,8 @@ std::string algorithmNames() {
 
 struct ViewFlags {
   std::string scene, cameraFile, size = "1280x720", depthFormat, background;
-  std::string raster = "tiled", cull = "none", shading = "lambert";
+  std::string cull = "none", shading = "lambert";
+  std::vector<std::string> params;  // --param KEY=VALUE, repeatable
   bool depthOnly = false;
   std::string outputs;  // --outputs (not given: all)
   std::string eye, target, up;
@@ -186,9 +185,11 @@ struct ViewFlags {
         ->type_name("N")
         ->check(CLI::Range(0, 4096))
         ->capture_default_str();
-    cmd.add_option("--raster", raster, "Triangle rasterizer (tiled: fast, bit-identical to halfspace)")
-        ->check(oneOf(kRasterNames))
-        ->capture_default_str();
+    cmd.add_option("--param", params,
+                   "An algorithm parameter, repeatable (e.g. --param raster=halfspace); 'hsr algorithms' lists "
+                   "each algorithm's parameters, values and defaults")
+        ->type_name("KEY=VALUE")
+        ->take_all();
     CLI::Option* depthOnlyFlag = cmd.add_flag(
         "--depth-only", depthOnly,
         "z-buffer keeps only depth: no face ids or colour; depth is the stored value mapped back to eye depth");
@@ -222,6 +223,19 @@ struct ViewFlags {
     return outputsFlag->count() ? hsr::parseFrameOutputs(outputs, "--outputs") : hsr::FrameOutputs::All;
   }
 
+  // --param KEY=VALUE flags as a map (a key given twice is an error).
+  std::map<std::string, std::string> parsedParams() const {
+    std::map<std::string, std::string> out;
+    for (const std::string& p : params) {
+      const size_t eq = p.find('=');
+      if (eq == std::string::npos || eq == 0)
+        throw InputError(fmt::format("--param '{}': expected KEY=VALUE (see 'hsr algorithms')", p));
+      if (!out.emplace(p.substr(0, eq), p.substr(eq + 1)).second)
+        throw InputError(fmt::format("--param '{}': {} is given twice", p, p.substr(0, eq)));
+    }
+    return out;
+  }
+
   bool openGlFlagsGiven() const {
     return !eye.empty() || !target.empty() || !up.empty() || fovFlag->count() || orthoFlag->count();
   }
@@ -233,14 +247,16 @@ struct ViewFlags {
     job.sceneName = scene;
     ImageSize imageSize = parseSize(size);
     job.options = options;
-    job.options.raster = valueOf(kRasterNames, raster);
+    job.options.params = parsedParams();
     job.options.outputs = frameOutputs();
     job.options.cull = valueOf(kCullNames, cull);
     job.options.shading = valueOf(kShadingNames, shading);
     if (!depthFormat.empty()) job.options.depthFormat = hsr::DepthFormat::parse(depthFormat);
     if (!background.empty()) job.options.background = parseColor(background);
-    if (!hsr::findAlgorithm(options.algorithm))
+    const hsr::AlgorithmInfo* algorithm = hsr::findAlgorithm(options.algorithm);
+    if (!algorithm)
       throw InputError(fmt::format("--algorithm '{}': unknown (known: {})", options.algorithm, algorithmNames()));
+    hsr::resolveParams(*algorithm, job.options.params);  // a parameter typo fails before the scene loads
     std::optional<hsr::CameraSpec> fileCamera;
     if (!cameraFile.empty()) fileCamera = hsr::parseCameraJson(readTextFile(cameraFile), cameraFile);
     std::optional<hsr::dvec3> eyeValue, targetValue, upValue;
@@ -290,16 +306,18 @@ using Runner = std::function<int()>;
 
 struct RenderFlags {
   ViewFlags view;
-  std::string out, ids, depth, depthImage, stats;
+  std::string out, ids, depth, depthImage, overdrawImage, stats;
   bool verify = false, quiet = false, json = false;
 };
 
 // The human summary of one rendered frame.
 void printSummary(const Job& job, const hsr::Stats& s, double wallMs, const std::vector<std::string>& written) {
   double pixels = double(s.width) * double(s.height);
-  fmt::print("{} on {}: {}x{}{}, {} threads, raster {}, cull {}\n", s.algorithm, job.sceneName, s.width, s.height,
+  std::string params;
+  for (const auto& [key, value] : s.params) params += fmt::format(" {}={}", key, value);
+  fmt::print("{}{} on {}: {}x{}{}, {} threads, cull {}\n", s.algorithm, params, job.sceneName, s.width, s.height,
              s.depth_format.empty() ? "" : ", depth " + s.depth_format, hsr::resolveThreads(job.options.threads),
-             nameOf(kRasterNames, job.options.raster), nameOf(kCullNames, job.options.cull));
+             nameOf(kCullNames, job.options.cull));
   fmt::print("  faces {}, triangles {} (clipped {}, degenerate {}; culled back-face {}, frustum {}, occlusion {})\n",
              s.faces, s.triangles, s.triangles_clipped, s.triangles_degenerate, s.culled_backface, s.culled_frustum,
              s.culled_occlusion);
@@ -323,7 +341,8 @@ int runRender(const RenderFlags& f) {
   const Output outputs[] = {{f.out, hsr::OutputKind::Color, hsr::writeColorPng},
                             {f.ids, hsr::OutputKind::FaceIds, hsr::writeFaceIds},
                             {f.depth, hsr::OutputKind::Depth, hsr::writeDepth},
-                            {f.depthImage, hsr::OutputKind::DepthImage, hsr::writeDepthImage}};
+                            {f.depthImage, hsr::OutputKind::DepthImage, hsr::writeDepthImage},
+                            {f.overdrawImage, hsr::OutputKind::OverdrawImage, hsr::writeOverdrawImage}};
   // Reject output names no writer knows before any work is done.
   for (const Output& o : outputs)
     if (!o.path.empty()) hsr::checkOutputPath(o.kind, o.path);
@@ -340,6 +359,7 @@ int runRender(const RenderFlags& f) {
 
   Job job = f.view.prepare();
   job.options.verify = f.verify;
+  job.options.countWrites = !f.overdrawImage.empty();
   auto start = std::chrono::steady_clock::now();
   hsr::Frame frame = hsr::render(job.scene, job.camera, job.options);
   double wallMs = millisecondsSince(start);
@@ -377,15 +397,21 @@ Runner setupRender(CLI::App& cmd) {
   cmd.add_option("--depth-image", f->depthImage, "Depth as a grey picture, near white, background black")
       ->type_name("DEPTH.png")
       ->group(outputs);
+  cmd.add_option("--overdraw-image", f->overdrawImage,
+                 "Fragments written per pixel, on a fixed colour scale: black 0, blue 1, green 2, yellow 3, orange "
+                 "4, red 5, magenta 6, white 7 or more")
+      ->type_name("OVERDRAW.png")
+      ->group(outputs);
   cmd.add_option("--stats", f->stats, "Statistics JSON")->type_name("STATS.json")->group(outputs);
   cmd.add_flag("--verify", f->verify, "Also render the exact reference and count wrong/ambiguous pixels");
   cmd.add_flag("--json", f->json, "Print the statistics JSON to stdout instead of the summary");
   cmd.add_flag("-q,--quiet", f->quiet, "Print nothing on success");
 
-  std::string footer = "Algorithms:\n";
+  std::string footer = "Algorithms ('hsr algorithms' lists their parameters and guarantees):\n";
   for (const hsr::AlgorithmInfo& a : hsr::algorithms()) footer += fmt::format("  {:<12} {}\n", a.name, a.summary);
   footer +=
       "\nExamples:\n"
+      "  hsr render builtin:painter-cycle --algorithm zbuffer --param raster=halfspace --overdraw-image o.png\n"
       "  hsr render builtin:cubes -o cubes.png\n"
       "  hsr render model.obj --camera cam.json --size 1920x1080 --ids ids.png --depth depth.npy --verify\n"
       "  hsr render scene.json --eye 4,3,5 --target 0,0,0 --depth-format u16:z --depth-image z.png";
@@ -415,9 +441,9 @@ int runBench(const BenchFlags& f) {
   std::vector<double> frameMs;
   hsr::Frame frame;
   hsr::OcclusionBuffer occlusion;
-  if (f.occlusion && (job.options.algorithm != "zbuffer" || job.options.raster != hsr::RasterKind::Tiled))
+  if (f.occlusion && (job.options.algorithm != "zbuffer" || !job.options.params.empty()))
     throw hsr::InputError("--occlusion: times the occlusion buffer (the tiled z-buffer, depth only); drop "
-                          "--algorithm and --raster");
+                          "--algorithm and --param");
   auto renderOnce = [&] {
     if (f.occlusion)  // depth kept in tiles, no image: what an occlusion culler pays per frame
       occlusion.render(job.scene, job.camera, {job.options.depthFormat, job.options.cull, job.options.threads});
@@ -542,6 +568,51 @@ Runner setupScenes(CLI::App& cmd) {
   };
 }
 
+// `hsr algorithms`: the registry, as text or JSON.
+Json algorithmsJson() {
+  Json out = Json::array();
+  for (const hsr::AlgorithmInfo& a : hsr::algorithms()) {
+    Json params = Json::array();
+    for (const hsr::ParamSpec& p : a.params) {
+      Json entry = {{"name", p.name}, {"type", hsr::paramTypeName(p.type)}, {"default", p.defaultValue}};
+      if (p.type == hsr::ParamType::Choice) entry["values"] = p.choices;
+      if (p.type == hsr::ParamType::Int || p.type == hsr::ParamType::Real) entry["range"] = {p.min, p.max};
+      entry["help"] = p.help;
+      params.push_back(entry);
+    }
+    out.push_back({{"name", a.name}, {"summary", a.summary}, {"source", a.source},
+                   {"guarantee", a.guarantee.describe()}, {"params", params}});
+  }
+  return out;
+}
+
+void printAlgorithms() {
+  for (const hsr::AlgorithmInfo& a : hsr::algorithms()) {
+    fmt::print("{}\n  {}\n  source: {}\n  guarantee: {}\n", a.name, a.summary, a.source, a.guarantee.describe());
+    if (!a.guarantee.condition.empty() && a.guarantee.kind == hsr::Guarantee::Kind::Exact)
+      fmt::print("    ({})\n", a.guarantee.condition);
+    if (a.params.empty()) fmt::print("  parameters: none\n");
+    for (const hsr::ParamSpec& p : a.params) {
+      std::string values = p.type == hsr::ParamType::Choice ? fmt::format("{}", fmt::join(p.choices, "|"))
+                           : p.type == hsr::ParamType::Bool ? "on|off"
+                                                            : fmt::format("{} in [{}, {}]", hsr::paramTypeName(p.type), p.min, p.max);
+      fmt::print("  --param {}={}  (default {})\n      {}\n", p.name, values, p.defaultValue, p.help);
+    }
+    fmt::print("\n");
+  }
+  fmt::print("Set a parameter with 'hsr render SCENE --algorithm NAME --param KEY=VALUE'.\n");
+}
+
+Runner setupAlgorithms(CLI::App& cmd) {
+  auto json = std::make_shared<bool>(false);
+  cmd.add_flag("--json", *json, "Print a JSON array instead");
+  return [json] {
+    if (*json) fmt::print("{}\n", algorithmsJson().dump(2));
+    else printAlgorithms();
+    return 0;
+  };
+}
+
 Json boundsJson(const hsr::Bounds3& b) {
   if (b.empty()) return nullptr;
   return {{"min", {b.lo.x, b.lo.y, b.lo.z}}, {"max", {b.hi.x, b.hi.y, b.hi.z}}};
@@ -610,6 +681,7 @@ struct Subcommand {
 const Subcommand kSubcommands[] = {
     {"render", "Render a scene to colour, face-id and depth files, with statistics", setupRender},
     {"bench", "Time repeated renders of a scene: median and minimum", setupBench},
+    {"algorithms", "List the visibility algorithms: parameters, sources and guarantees", setupAlgorithms},
     {"scenes", "List the built-in scenes and their parameters", setupScenes},
     {"info", "Describe a scene: counts, meshes, bounds, problems, camera", setupInfo},
     {"help", "Explain hsr or one of its commands", setupHelp},
@@ -624,6 +696,10 @@ Runner setupHelp(CLI::App& cmd) {
     // root page directly.
     if (topic->empty()) {
       std::cout << root->get_formatter()->make_help(root, root->get_name(), CLI::AppFormatMode::Normal);
+      return 0;
+    }
+    if (*topic == "algorithms") {  // the listing itself is the help
+      printAlgorithms();
       return 0;
     }
     std::string known;

@@ -114,7 +114,7 @@ BENCHMARK(BM_RasterTiles)
 void BM_Frame(benchmark::State& state) {
   const Prepared& p = prepared(kScenes[state.range(0)]);
   RenderOptions options;
-  options.raster = state.range(1) == 0 ? RasterKind::Tiled : RasterKind::HalfSpace;
+  options.params["raster"] = state.range(1) == 0 ? "tiled" : "halfspace";
   options.threads = int(state.range(2));
   if (state.range(3)) options.outputs = FrameOutputs::DepthOnly;
   for (auto _ : state) {

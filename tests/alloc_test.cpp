@@ -100,7 +100,7 @@ TEST(Memory, WarmOcclusionRendersAllocateNoBuffers) {
       counted([&] { st = &buffer.render(scene, cam, {DepthFormat{}, cull, 2}); });
       EXPECT_LE(allocations.load(), 8u) << name;
       EXPECT_LE(largest.load(), 1024u) << name << ": a buffer was allocated during a warm render";
-      if (std::string(name) == "builtin:city") EXPECT_GT(st->meshes_culled_occlusion.value_or(0), 500u);
+      if (std::string(name) == "builtin:city") EXPECT_GT(st->detailCount("meshes_culled_occlusion").value_or(0), 500u);
     }
   }
 }

@@ -87,7 +87,7 @@ TEST_F(CommandLine, VersionAndHelp) {
   EXPECT_EQ(r.out.rfind("hsr ", 0), 0u) << r;
   r = hsr("help");
   EXPECT_EQ(r.status, 0) << r;
-  for (const char* command : {"render", "bench", "scenes", "info", "help"}) EXPECT_NE(r.out.find(command), std::string::npos);
+  for (const char* command : {"render", "bench", "algorithms", "scenes", "info", "help"}) EXPECT_NE(r.out.find(command), std::string::npos);
 }
 
 TEST_F(CommandLine, HelpRenderMentionsEveryFlag) {
@@ -95,7 +95,7 @@ TEST_F(CommandLine, HelpRenderMentionsEveryFlag) {
   ASSERT_EQ(r.status, 0) << r;
   for (const char* flag :
        {"--camera", "--size", "--algorithm", "--depth-format", "--out", "-o", "--ids", "--depth ", "--depth-image",
-        "--stats", "--verify", "--threads", "--raster", "--cull", "--shading", "--background", "--eye", "--target",
+        "--stats", "--verify", "--threads", "--param", "--overdraw-image", "--cull", "--shading", "--background", "--eye", "--target",
         "--up", "--fov", "--near", "--far", "--ortho", "--json", "--quiet", "zbuffer"})
     EXPECT_NE(r.out.find(flag), std::string::npos) << flag;
   EXPECT_EQ(hsr("render --help").out, r.out);
@@ -231,7 +231,7 @@ TEST_F(CommandLine, BenchOcclusionTimesTheOcclusionBuffer) {
   nlohmann::json depth = nlohmann::json::parse(d.out);
   EXPECT_EQ(bench["covered_pixels"], depth["covered_pixels"]);
   EXPECT_GT(bench["covered_pixels"].get<int>(), 1000);
-  Result bad = hsr("bench builtin:city --frames 1 --occlusion --raster halfspace");
+  Result bad = hsr("bench builtin:city --frames 1 --occlusion --param raster=halfspace");
   EXPECT_EQ(bad.status, 2) << bad;
   EXPECT_NE(bad.err.find("--occlusion"), std::string::npos) << bad;
 }
@@ -309,4 +309,62 @@ TEST_F(CommandLine, UnwritableOutputIsExitOne) {
   EXPECT_TRUE(r.oneErrorLine()) << r;
   EXPECT_NE(r.err.find("no/such/dir/c.png"), std::string::npos) << r;
   EXPECT_TRUE(listing().empty());
+}
+
+TEST_F(CommandLine, AlgorithmsListsEveryAlgorithmWithGuaranteeAndParameters) {
+  Result r = hsr("algorithms");
+  ASSERT_EQ(r.status, 0) << r;
+  for (const char* text : {"zbuffer", "raycast", "guarantee: exact", "--param raster=tiled|halfspace|scanline",
+                           "(default tiled)", "source:"})
+    EXPECT_NE(r.out.find(text), std::string::npos) << text << "\n" << r;
+  EXPECT_EQ(hsr("help algorithms").out, r.out);
+  Result j = hsr("algorithms --json");
+  ASSERT_EQ(j.status, 0) << j;
+  const nlohmann::json list = nlohmann::json::parse(j.out);
+  ASSERT_GE(list.size(), 2u);
+  EXPECT_EQ(list[0]["name"], "zbuffer");
+  EXPECT_EQ(list[0]["params"][0]["name"], "raster");
+  EXPECT_EQ(list[0]["params"][0]["values"].size(), 3u);
+  EXPECT_EQ(list[1]["guarantee"], "exact");
+}
+
+TEST_F(CommandLine, ParamTyposAndBadValuesAreExit2NamingThem) {
+  for (const auto& [args, named] : std::vector<std::pair<std::string, std::string>>{
+           {"--param rastr=halfspace", "rastr"},
+           {"--param raster=fast", "fast"},
+           {"--param raster", "KEY=VALUE"},
+           {"--param raster=halfspace --param raster=tiled", "twice"},
+           {"--algorithm raycast --param raster=tiled", "raycast has no parameter"}}) {
+    Result r = hsr("render builtin:cubes --size 32x24 -o x.png " + args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r;
+    EXPECT_TRUE(r.oneErrorLine()) << r;
+    EXPECT_NE(r.err.find(named), std::string::npos) << args << "\n" << r;
+    EXPECT_FALSE(fs::exists(file("x.png"))) << args;
+  }
+}
+
+TEST_F(CommandLine, StatisticsRecordParamsAndTheOverdrawImageIsWritten) {
+  Result r = hsr("render builtin:painter-cycle --size 64x48 --param raster=scanline --stats s.json "
+                 "--overdraw-image o.png --threads 1 -q");
+  ASSERT_EQ(r.status, 0) << r;
+  const nlohmann::json stats = nlohmann::json::parse(readText(file("s.json")));
+  EXPECT_EQ(stats["algorithm"], "zbuffer");
+  EXPECT_EQ(stats["params"]["raster"], "scanline");
+  EXPECT_EQ(stats["zbuffer"]["rasterizer"], "scanline");
+  EXPECT_EQ(stats["zbuffer"]["write_rule"], "depth-test");
+  int w = 0, h = 0, n = 0;
+  unsigned char* pixels = stbi_load(file("o.png").c_str(), &w, &h, &n, 3);
+  ASSERT_NE(pixels, nullptr);
+  EXPECT_EQ(w, 64);
+  EXPECT_EQ(h, 48);
+  // Somewhere the cycle's polygons overlap: a pixel written twice (green on the fixed scale).
+  bool twice = false;
+  for (int i = 0; i < w * h; ++i) twice |= pixels[3 * i] == 40 && pixels[3 * i + 1] == 170 && pixels[3 * i + 2] == 80;
+  stbi_image_free(pixels);
+  EXPECT_TRUE(twice);
+  // The tiled z-buffer cannot count per-pixel writes: a clear refusal, nothing written.
+  Result tiled = hsr("render builtin:painter-cycle --size 64x48 --overdraw-image t.png");
+  EXPECT_EQ(tiled.status, 2) << tiled;
+  EXPECT_NE(tiled.err.find("raster=halfspace"), std::string::npos) << tiled;
+  EXPECT_FALSE(fs::exists(file("t.png")));
 }

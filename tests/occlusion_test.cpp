@@ -42,7 +42,7 @@ Camera cameraFor(const Scene& scene, int w, int h, int pose) {
 Frame referenceDepth(const Scene& scene, const Camera& cam, DepthFormat format) {
   RenderOptions o;
   o.depthFormat = format;
-  o.raster = RasterKind::HalfSpace;
+  setRaster(o, RasterKind::HalfSpace);
   o.outputs = FrameOutputs::DepthOnly;
   o.threads = 1;
   return render(scene, cam, o);
@@ -389,9 +389,9 @@ TEST(Occlusion, MeshCullingChangesNoStoredValue) {
             const Stats plain = without.render(scene, cam, {format, cull, threads});
             unsetenv("HSR_MESH_CULLING");
             const Stats& st = with.render(scene, cam, {format, cull, threads});
-            EXPECT_FALSE(plain.meshes_culled_occlusion.has_value()) << what;
-            culled += st.meshes_culled_occlusion.value_or(0);
-            passes += st.occlusion_passes.value_or(0) > 1;
+            EXPECT_FALSE(plain.detailCount("meshes_culled_occlusion").has_value()) << what;
+            culled += st.detailCount("meshes_culled_occlusion").value_or(0);
+            passes += st.detailCount("occlusion_passes").value_or(0) > 1;
             ++compared;
             for (int y = 0; y < cam.height; ++y)
               for (int x = 0; x < cam.width; ++x)
@@ -416,10 +416,10 @@ TEST(Occlusion, DepthOnlyRenderWithMeshCullingIsTheReference) {
           o.depthFormat = format;
           o.cull = cull;
           o.outputs = FrameOutputs::DepthOnly;
-          o.raster = RasterKind::HalfSpace;
+          setRaster(o, RasterKind::HalfSpace);
           o.threads = 1;
           const Frame reference = render(scene, cam, o);
-          o.raster = RasterKind::Tiled;
+          setRaster(o, RasterKind::Tiled);
           for (int threads : {1, 2}) {
             o.threads = threads;
             const Frame frame = render(scene, cam, o);
@@ -428,7 +428,7 @@ TEST(Occlusion, DepthOnlyRenderWithMeshCullingIsTheReference) {
             ASSERT_EQ(at, -1) << what << " at pixel " << at;
             EXPECT_EQ(frame.stats.covered_pixels, reference.stats.covered_pixels) << what;
             EXPECT_EQ(frame.stats.algorithm, "zbuffer") << what;
-            culled += frame.stats.meshes_culled_occlusion.value_or(0);
+            culled += frame.stats.detailCount("meshes_culled_occlusion").value_or(0);
           }
         }
   EXPECT_GT(culled, 1000u) << "the depth-only frames went through mesh culling";
@@ -514,10 +514,10 @@ TEST(Occlusion, FramesWithIdsAndMeshCullingAreTheSameBits) {
             const Frame plain = render(scene, cam, o);
             unsetenv("HSR_MESH_CULLING");
             const Frame frame = render(scene, cam, o);
-            EXPECT_FALSE(plain.stats.meshes_culled_occlusion.has_value()) << what;
-            (tied ? culledTied : culled) += frame.stats.meshes_culled_occlusion.value_or(0);
+            EXPECT_FALSE(plain.stats.detailCount("meshes_culled_occlusion").has_value()) << what;
+            (tied ? culledTied : culled) += frame.stats.detailCount("meshes_culled_occlusion").value_or(0);
             if (scene.source.starts_with("builtin:clutter"))  // (curved meshes: no bound, so no first pass)
-              EXPECT_EQ(frame.stats.occlusion_passes, 1u) << what;
+              EXPECT_EQ(frame.stats.detailCount("occlusion_passes"), 1u) << what;
             ++compared;
             ASSERT_EQ(firstDifference(plain.faceId, frame.faceId), -1) << what;
             ASSERT_EQ(firstDifference(plain.triangleId, frame.triangleId), -1) << what;

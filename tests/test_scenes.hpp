@@ -8,6 +8,15 @@
 #include <string>
 #include <random>
 
+namespace hsr {
+/// The z-buffer's rasterizers (its `raster` parameter), for tests that compare them.
+enum class RasterKind : uint8_t { Tiled, HalfSpace, Scanline };
+inline const char* rasterName(RasterKind k) {
+  return k == RasterKind::Tiled ? "tiled" : k == RasterKind::HalfSpace ? "halfspace" : "scanline";
+}
+inline void setRaster(RenderOptions& options, RasterKind k) { options.params["raster"] = rasterName(k); }
+}  // namespace hsr
+
 namespace hsr::test {
 
 /// First pixel where two frame buffers differ bitwise, or -1 (0 when their sizes differ).

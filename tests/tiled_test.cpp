@@ -118,7 +118,7 @@ Frame renderWith(const Scene& scene, const Camera& cam, DepthFormat format, Rast
                  FrameOutputs outputs = FrameOutputs::All) {
   RenderOptions o;
   o.depthFormat = format;
-  o.raster = raster;
+  setRaster(o, raster);
   o.threads = threads;
   o.outputs = outputs;
   return render(scene, cam, o);
@@ -164,11 +164,11 @@ bool expectIdentical(const Frame& reference, const Frame& fast, const std::strin
   EXPECT_LE(fast.stats.covered_pixels, fast.stats.depth_writes) << what;
   EXPECT_LE(fast.stats.depth_writes, fast.stats.depth_tests) << what;
   // (A frame through mesh culling also tests in its first pass what the frame then tests again.)
-  if (!fast.stats.occlusion_passes) EXPECT_LE(fast.stats.depth_tests, reference.stats.depth_tests) << what;
+  if (!fast.stats.detailCount("occlusion_passes")) EXPECT_LE(fast.stats.depth_tests, reference.stats.depth_tests) << what;
   // One colour write per fragment that won; a frame through mesh culling also counts its
   // depth-only first pass's depth writes.
   if (!reference.stats.color_writes) EXPECT_EQ(fast.stats.color_writes, 0u) << what;
-  else if (!fast.stats.occlusion_passes) EXPECT_EQ(fast.stats.color_writes, fast.stats.depth_writes) << what;
+  else if (!fast.stats.detailCount("occlusion_passes")) EXPECT_EQ(fast.stats.color_writes, fast.stats.depth_writes) << what;
   else EXPECT_TRUE(fast.stats.covered_pixels <= fast.stats.color_writes && fast.stats.color_writes < fast.stats.depth_writes) << what;
   return true;
 }
@@ -177,7 +177,7 @@ std::string replayCommand(const std::string& scene, const CameraSpec& pose, int 
   return fmt::format(
       "Replay: save the camera as cam.json, then compare\n"
       "  hsr render '{0}' --camera cam.json --size {1}x{2} --depth-format {3} --threads {4} --ids a.npy --depth a.npy\n"
-      "  with --raster halfspace --threads 1\n{5}",
+      "  with --param raster=halfspace --threads 1\n{5}",
       scene, w, h, f.name(), threads, cameraSpecToJson(pose));
 }
 
@@ -1089,12 +1089,12 @@ TEST(Tiled, DeferredBackFacesChangeNoBit) {
             EXPECT_EQ(firstDifference(on.color, off.color), -1) << what;
             EXPECT_EQ(on.stats.covered_pixels, off.stats.covered_pixels) << what;
             // The deferral's statistics: what the front end above deferred, none with it off.
-            EXPECT_EQ(on.stats.triangles_deferred, deferred.size()) << what;
-            EXPECT_EQ(on.stats.clusters_deferred, clusters) << what;
-            EXPECT_LE(on.stats.triangles_set_up_late.value_or(0), deferred.size()) << what;
-            if (inside) EXPECT_GT(on.stats.triangles_set_up_late.value_or(0), 200u) << what;
-            EXPECT_EQ(off.stats.triangles_deferred, 0u) << what;
-            EXPECT_EQ(off.stats.triangles_set_up_late, 0u) << what;
+            EXPECT_EQ(on.stats.detailCount("triangles_deferred"), deferred.size()) << what;
+            EXPECT_EQ(on.stats.detailCount("clusters_deferred"), clusters) << what;
+            EXPECT_LE(on.stats.detailCount("triangles_set_up_late").value_or(0), deferred.size()) << what;
+            if (inside) EXPECT_GT(on.stats.detailCount("triangles_set_up_late").value_or(0), 200u) << what;
+            EXPECT_EQ(off.stats.detailCount("triangles_deferred"), 0u) << what;
+            EXPECT_EQ(off.stats.detailCount("triangles_set_up_late"), 0u) << what;
             if (outputs == FrameOutputs::DepthOnly) continue;
             const auto shown = std::count_if(on.triangleId.begin(), on.triangleId.end(),
                                              [&](int32_t t) { return deferred.count(t) > 0; });
@@ -1142,7 +1142,7 @@ TEST(Tiled, PumpedBackgroundIsTheReferences) {
   for (int width : {1000, 1016}) {
     const Camera cam = resolveCamera(pose, width, 700, b);
     RenderOptions ref;
-    ref.raster = RasterKind::HalfSpace;
+    setRaster(ref, RasterKind::HalfSpace);
     ref.background = Rgba8{10, 20, 30, 255};
     const Frame reference = render(scene, cam, ref);
     ASSERT_GT(reference.stats.covered_pixels, 1000u);
@@ -1150,7 +1150,7 @@ TEST(Tiled, PumpedBackgroundIsTheReferences) {
     for (FrameOutputs outputs : {FrameOutputs::All, FrameOutputs::FaceIds | FrameOutputs::Color, FrameOutputs::DepthOnly})
       for (int threads : {1, 2, 3}) {
         RenderOptions o = ref;
-        o.raster = RasterKind::Tiled;
+        setRaster(o, RasterKind::Tiled);
         o.outputs = outputs;
         o.threads = threads;
         Frame pumped, unpumped;

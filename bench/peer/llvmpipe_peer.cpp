@@ -339,8 +339,7 @@ int run(Options& o) {
     throw InputError("--outputs '" + o.outputs + "': the comparison needs face ids (add face)");
   // Named rasterizers pin what is measured (halfspace: the scalar reference); "default" follows
   // hsr's own default, as `hsr render` and `hsr bench` do.
-  if (o.raster == "halfspace") hsrOptions.raster = hsr::RasterKind::HalfSpace;
-  if (o.raster == "scanline") hsrOptions.raster = hsr::RasterKind::Scanline;
+  if (o.raster != "default") hsrOptions.params["raster"] = o.raster;
   hsr::RenderOptions allOptions = hsrOptions;  // the same, with all four buffers
   allOptions.outputs = hsr::FrameOutputs::All;
 

@@ -1,5 +1,5 @@
 // The visibility buffer every algorithm fills — per pixel: face id, world triangle id, eye depth
-// and colour — and the statistics every algorithm reports (keys of CONVENTIONS.md).
+// and colour — and the statistics every algorithm reports (keys of docs/conventions.md).
 // Produced by render(); consumed by the writers (io.hpp), --verify and compare.
 #pragma once
 #include <hsr/common.hpp>
@@ -9,7 +9,9 @@
 #include <new>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
+#include <variant>
 #include <vector>
 
 namespace hsr {
@@ -94,20 +96,29 @@ struct Stats {
   std::string depth_format;        // e.g. "f32:reversed" (empty for algorithms without one)
   std::vector<std::pair<std::string, double>> time_ms;  // stage -> ms, in pipeline order
   std::optional<uint64_t> wrong_pixels, ambiguous_pixels;  // with --verify
-  // The tiled rasterizer only (README, Performance: deferred back faces and clusters): triangles
-  // the front end did not set up but deferred to the tile pass, the clusters (runs of 32) among them,
-  // and the deferred triangles the tile pass set up because they might show.
-  std::optional<uint64_t> triangles_deferred, clusters_deferred, triangles_set_up_late;
-  // The occlusion buffer's mesh culling (README, Performance): the passes it drew the scene in,
-  // nearest meshes first; the meshes found hidden whole behind what the passes before had drawn,
-  // and their triangles, never set up.
-  std::optional<uint64_t> occlusion_passes, meshes_culled_occlusion, triangles_culled_occlusion;
+  /// The parameters the algorithm ran with, in declaration order (JSON "params").
+  std::vector<std::pair<std::string, std::string>> params;
+  /// The algorithm's own counters and facts (which rasterizer ran, what it deferred or culled),
+  /// written as a nested JSON object named after the algorithm; docs/algorithms/NAME.md lists them.
+  /// Keys are string literals (static storage), so a warm frame allocates nothing for them.
+  using Detail = std::variant<uint64_t, double, std::string>;
+  std::vector<std::pair<std::string_view, Detail>> details;
 
   double overdraw() const { return covered_pixels ? double(color_writes) / double(covered_pixels) : 0.0; }
   void addTime(const std::string& stage, double ms);
-  /// The statistics as one JSON object (CONVENTIONS.md keys plus a few more).
+  /// Sets the detail `key` (replacing its value); addDetail adds to a count (0 if absent).
+  void setDetail(std::string_view key, Detail value);
+  void addDetail(std::string_view key, uint64_t count);
+  /// The count `key` of the details, if the algorithm reported it.
+  std::optional<uint64_t> detailCount(std::string_view key) const;
+  /// The text detail `key` ("" if absent).
+  std::string detailText(std::string_view key) const;
+  /// The statistics as one JSON object (the keys of docs/conventions.md).
   std::string toJson(int indent = 2) const;
 };
+
+/// Per pixel, how many fragments wrote it: Frame::writes, for the overdraw picture.
+using WriteCount = uint32_t;
 
 struct Frame {
   int width = 0, height = 0;
@@ -115,6 +126,9 @@ struct Frame {
   FrameBuffer<int32_t> triangleId;  // index into Scene::triangles, -1 background
   FrameBuffer<float> depth;         // eye-space depth, +inf background
   FrameBuffer<Rgba8> color;         // shaded colour, background colour where empty
+  /// With RenderOptions::countWrites: the fragments written per pixel (an algorithm's overdraw
+  /// at each pixel); otherwise empty.
+  FrameBuffer<WriteCount> writes;
   Stats stats;
 
   /// Sizes the buffers for w x h, reusing their memory: depth always, faceId, triangleId and

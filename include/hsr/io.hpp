@@ -1,5 +1,5 @@
 // Files in and out: scene loading (mesh files, scene JSON, builtin:NAME) and the image writers
-// of CONVENTIONS.md. Every writer writes a temporary file beside the target and renames it, so
+// of docs/conventions.md. Every writer writes a temporary file beside the target and renames it, so
 // a failure never leaves half a file. Errors: InputError "file[:line]: problem".
 #pragma once
 #include <hsr/frame.hpp>
@@ -19,10 +19,13 @@ void writeColorPng(const Frame& frame, const std::string& path);
 void writeFaceIds(const Frame& frame, const std::string& path);     // .png (24-bit id+1) or .npy (int32)
 void writeDepth(const Frame& frame, const std::string& path);       // .npy .pfm .exr .f32
 void writeDepthImage(const Frame& frame, const std::string& path);  // .png grey, near white
+/// Frame::writes as a .png on a fixed scale (the same colour for the same count in every image):
+/// black 0, then blue (1 write), green, yellow, orange, red, magenta, and white for 7 or more.
+void writeOverdrawImage(const Frame& frame, const std::string& path);
 void writeTextFile(const std::string& text, const std::string& path);
 
 /// The files the writers above produce, for checking paths before any work is done.
-enum class OutputKind : uint8_t { Color, FaceIds, Depth, DepthImage };
+enum class OutputKind : uint8_t { Color, FaceIds, Depth, DepthImage, OverdrawImage };
 /// Throws InputError "path: ..." naming the allowed extensions when the writer for `kind` does
 /// not know `path`'s extension (the writers check the same way).
 void checkOutputPath(OutputKind kind, const std::string& path);

@@ -9,12 +9,13 @@
 //  - depth test: strictly nearer wins, so on ties the triangle drawn first stays;
 //  - faces are two-sided unless cull = back/front (front = counter-clockwise as seen).
 #pragma once
+#include <hsr/algorithm.hpp>
 #include <hsr/camera.hpp>
 #include <hsr/depth_format.hpp>
 #include <hsr/frame.hpp>
 #include <hsr/scene.hpp>
 
-#include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -22,40 +23,28 @@ namespace hsr {
 
 enum class Cull : uint8_t { None, Back, Front };
 enum class Shading : uint8_t { Flat, Lambert, FaceId };
-/// The z-buffer's rasterizer. Tiled (default): binned, tiled, SIMD, multithreaded, bit-identical
-/// to HalfSpace (the scalar reference and its test oracle). Scanline: document 003's.
-enum class RasterKind : uint8_t { Tiled, HalfSpace, Scanline };
-// What the z-buffer resolves into the Frame: FrameOutputs (frame.hpp).
 
 struct RenderOptions {
   std::string algorithm = "zbuffer";
-  DepthFormat depthFormat;               // default f32:reversed
-  RasterKind raster = RasterKind::Tiled;
-  FrameOutputs outputs = FrameOutputs::All;
+  /// The algorithm's own parameters, name -> value as text (`--param name=value`); those not
+  /// given take their defaults (`hsr algorithms` lists them).
+  std::map<std::string, std::string> params;
+  DepthFormat depthFormat;                // default f32:reversed
+  FrameOutputs outputs = FrameOutputs::All;  // what is resolved into the Frame (frame.hpp)
   Cull cull = Cull::None;
   Shading shading = Shading::Lambert;
   Rgba8 background{0, 0, 0, 255};
   int threads = 0;                        // 0: all cores
   bool verify = false;                    // also render the reference and count wrong pixels
+  bool countWrites = false;               // fill Frame::writes: fragments written per pixel
 };
 
-/// Renders `scene` (finalized) seen by `camera` with options.algorithm.
-/// Throws InputError for an unknown algorithm or bad options.
+/// Renders `scene` (finalized) seen by `camera` with options.algorithm and options.params.
+/// Throws InputError for an unknown algorithm, parameter or bad options.
 Frame render(const Scene& scene, const Camera& camera, const RenderOptions& options);
 /// The same into `frame`, reusing its buffers: for rendering many frames (or views) without
 /// allocating a new visibility buffer each time.
 void render(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
-
-/// A visibility algorithm: fills frame.faceId/triangleId/depth/color and frame.stats.
-using AlgorithmFn = std::function<void(const Scene&, const Camera&, const RenderOptions&, Frame&)>;
-struct AlgorithmInfo {
-  std::string name;
-  std::string summary;
-  AlgorithmFn run;
-};
-/// All algorithms, in the order `hsr help render` lists them.
-const std::vector<AlgorithmInfo>& algorithms();
-const AlgorithmInfo* findAlgorithm(const std::string& name);
 
 /// The instruction set the tiled rasterizer's SIMD kernel runs with on this machine, chosen at
 /// run time (e.g. "AVX3" = AVX-512, "AVX2", "SSE4", "EMU128"): for benchmark records.

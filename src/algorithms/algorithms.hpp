@@ -1,18 +1,27 @@
-// The visibility algorithms, one function each, registered in render.cpp. Each fills the whole
-// Frame (visibility buffer + statistics) from a finalized scene and a resolved camera. render()
-// hands it sized but not cleared (Frame::allocate): an algorithm writes every pixel of the
-// buffers present, or calls Frame::clear() first.
+// The visibility algorithms' declarations, one per file (src/algorithms/NAME.cpp), listed by
+// the registry (registry.cpp), and what render() and the algorithms share. An algorithm fills
+// the whole Frame (visibility buffer + statistics) from a finalized scene and a resolved camera;
+// render() hands it sized but not cleared (Frame::allocate): it writes every pixel of the
+// buffers present, or calls Frame::clear() first (the drawing service, draw.hpp, does).
 #pragma once
+#include <hsr/algorithm.hpp>
 #include <hsr/render.hpp>
 
 namespace hsr::algo {
 
-void zbuffer(const Scene&, const Camera&, const RenderOptions&, Frame&);  // zbuffer.cpp
-void raycast(const Scene&, const Camera&, const RenderOptions&, Frame&);  // raycast.cpp
+AlgorithmInfo zbufferAlgorithm();  // zbuffer.cpp: the textbook z-buffer, and the tiled one's dispatch
+AlgorithmInfo raycastAlgorithm();  // raycast.cpp: the exact reference
 
-/// Statistics of a frame before it is drawn: image size, faces and triangles of the scene
+/// The production z-buffer: binned, tiled, SIMD, multithreaded (zbuffer_tiled.cpp).
+void zbufferTiled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
+
+/// Bytes of the frame's sized buffers (part of every algorithm's memory_bytes).
+uint64_t frameBytes(const Frame& frame);
+
+/// Starts a frame's statistics: image size, faces and triangles of the scene, all else zero
 /// (render.cpp; render() starts every frame's statistics so, as does the occlusion buffer).
-Stats frameStats(const Scene& scene, const Camera& camera);
+/// The storage of `st`'s lists is kept for the frame.
+void beginStats(Stats& st, const Scene& scene, const Camera& camera);
 
 /// Throws InputError unless the camera's image size is in 1..kMaxImageSize and the depth format
 /// suits the camera (render.cpp; also checked by the occlusion buffer).

@@ -156,7 +156,8 @@ namespace {
 
 // The statistics of one pass's front end and tile pass, added to `st`.
 void addPassStats(Stats& st, const algo::TiledState& pass, const tiled::RasterCounters& counters) {
-  Stats part;
+  thread_local Stats part;  // (kept: its details' storage is reused from pass to pass)
+  part.details.clear();
   algo::tiledStats(part, pass.fe, &pass.bins, counters);
   st.triangles_clipped += part.triangles_clipped;
   st.triangles_degenerate += part.triangles_degenerate;
@@ -165,12 +166,8 @@ void addPassStats(Stats& st, const algo::TiledState& pass, const tiled::RasterCo
   st.culled_occlusion += part.culled_occlusion;
   st.depth_tests += part.depth_tests;
   st.depth_writes += part.depth_writes;
-  auto add = [](std::optional<uint64_t>& to, const std::optional<uint64_t>& from) {
-    if (from) to = to.value_or(0) + *from;
-  };
-  add(st.triangles_deferred, part.triangles_deferred);
-  add(st.clusters_deferred, part.clusters_deferred);
-  add(st.triangles_set_up_late, part.triangles_set_up_late);
+  for (const char* key : {"triangles_deferred", "clusters_deferred", "triangles_set_up_late"})
+    if (const auto count = part.detailCount(key)) st.addDetail(key, *count);
 }
 
 }  // namespace
@@ -371,9 +368,9 @@ void OcclusionBuffer::Impl::drawByMeshes(const Scene& scene, const RenderOptions
     culling.passes = passes + 1;  // (and the frame's)
     culling.trianglesCulled = culledTriangles;
   }
-  st.occlusion_passes = passes;
-  st.meshes_culled_occlusion = culledMeshes;
-  st.triangles_culled_occlusion = culledTriangles;
+  st.setDetail("occlusion_passes", passes);
+  st.setDetail("meshes_culled_occlusion", culledMeshes);
+  st.setDetail("triangles_culled_occlusion", culledTriangles);
 }
 
 // A render's start: the camera, depth setup and thread count; the statistics begun; the kept
@@ -385,7 +382,7 @@ RenderOptions OcclusionBuffer::Impl::start(const Scene& scene, const Camera& cam
   opt.cull = options.cull;
   opt.threads = options.threads;
   opt.outputs = FrameOutputs::DepthOnly;
-  stats = algo::frameStats(scene, cam);
+  algo::beginStats(stats, scene, cam);
   threads = resolveThreads(opt.threads);
   camera = cam;
   depth = DepthSetup{opt.depthFormat, cam.near, cam.far, cam.orthographic};

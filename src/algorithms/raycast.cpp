@@ -1,7 +1,7 @@
-// Ray casting, the image-space algorithm of document 001 and the exact reference of --verify:
+// Ray casting, the image-space algorithm of the KTH thesis and the exact reference of --verify:
 // one ray per pixel centre, nearest hit in double precision with a watertight test, no
 // sub-pixel snapping and no depth quantization. Rows run in parallel; any thread count gives
-// the same bits. Called through render() (registry in render.cpp).
+// the same bits. Called through render() (registry.cpp).
 #include "algorithms/algorithms.hpp"
 #include "algorithms/bvh.hpp"
 #include "core/parallel.hpp"
@@ -9,8 +9,10 @@
 #include "core/timer.hpp"
 
 namespace hsr::algo {
+namespace {
 
-void raycast(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame) {
+void raycast(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams&,
+             Frame& frame) {
   Timer timer;
   frame.resize(camera.width, camera.height, options.background, resolveThreads(options.threads));
   const CameraSpaceBvh bvh(scene, camera);
@@ -40,6 +42,7 @@ void raycast(const Scene& scene, const Camera& camera, const RenderOptions& opti
       frame.triangleId[idx] = hit.triangle;
       frame.depth[idx] = float(hit.t);
       frame.color[idx] = shade;
+      if (!frame.writes.empty()) frame.writes[idx] = 1;  // each pixel is written once
       ++row.covered;
     }
   });
@@ -56,6 +59,19 @@ void raycast(const Scene& scene, const Camera& camera, const RenderOptions& opti
   st.color_writes = st.covered_pixels;  // each covered pixel is written once
   const uint64_t pixels = uint64_t(camera.width) * uint64_t(camera.height);
   st.memory_bytes = bvh.memoryBytes() + pixels * (2 * sizeof(int32_t) + sizeof(float) + sizeof(Rgba8));
+}
+
+}  // namespace
+
+AlgorithmInfo raycastAlgorithm() {
+  AlgorithmInfo a;
+  a.name = "raycast";
+  a.summary = "ray casting: one ray per pixel centre, the nearest hit in double precision; the exact reference";
+  a.source = "KTH thesis";
+  a.guarantee.kind = Guarantee::Kind::Exact;
+  a.guarantee.condition = "it is the reference";
+  a.run = raycast;
+  return a;
 }
 
 }  // namespace hsr::algo

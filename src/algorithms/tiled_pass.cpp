@@ -109,9 +109,9 @@ void tiledStats(Stats& st, const FrontEndOutput& fe, const tiled::Bins* bins, co
       faces += fe.chunks[c].deferred.size();
       clusters += fe.chunks[c].clusters.size();
     }
-    st.triangles_deferred = faces + clusters * kClusterTriangles;
-    st.clusters_deferred = clusters;
-    st.triangles_set_up_late = counters.setUpLate;
+    st.setDetail("triangles_deferred", faces + clusters * kClusterTriangles);
+    st.setDetail("clusters_deferred", clusters);
+    st.setDetail("triangles_set_up_late", counters.setUpLate);
   }
 }
 

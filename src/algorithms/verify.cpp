@@ -10,6 +10,7 @@
 
 #include "algorithms/bvh.hpp"
 #include "core/parallel.hpp"
+#include "frontend/frontend.hpp"
 
 namespace hsr {
 namespace {
@@ -117,6 +118,41 @@ bool edgeAmbiguous(const algo::CameraSpaceBvh& bvh, const Scene& scene, Cull cul
   return false;
 }
 
+// Edge ambiguity from the triangle itself: the centre lies within kEdgeOffset of an edge of
+// triangle `tri` as projected (all its vertices in front of the eye). The offset rays above miss
+// the narrow wedge near a sharp vertex, which snapping can move onto or off the centre.
+bool nearTriangleEdge(const Scene& scene, const dmat4& pixelFromWorld, int32_t tri, double px, double py) {
+  if (tri < 0 || size_t(tri) >= scene.triangles.size()) return false;
+  const Triangle& t = scene.triangles[size_t(tri)];
+  double sx[3], sy[3];
+  for (int k = 0; k < 3; ++k) {
+    const HVertex h = transformVertex(scene.positions[t.v[k]], pixelFromWorld);
+    if (!(h.w > 0)) return false;
+    sx[k] = h.hx / h.w;
+    sy[k] = h.hy / h.w;
+  }
+  // Whether vertices a and b follow each other around the face: a diagonal of its triangulation
+  // is shared by two of its own triangles, so crossing it never changes the face seen.
+  const auto polygon = scene.face(t.face);
+  auto boundary = [&](uint32_t a, uint32_t b) {
+    for (size_t i = 0, n = polygon.size(); i < n; ++i) {
+      const uint32_t p = polygon[i], q = polygon[(i + 1) % n];
+      if ((p == a && q == b) || (p == b && q == a)) return true;
+    }
+    return false;
+  };
+  for (int k = 0; k < 3; ++k) {
+    const int j = (k + 1) % 3;
+    if (!boundary(t.v[k], t.v[j])) continue;
+    const double ex = sx[j] - sx[k], ey = sy[j] - sy[k], rx = px - sx[k], ry = py - sy[k];
+    const double length2 = ex * ex + ey * ey;
+    const double u = length2 > 0 ? std::clamp((rx * ex + ry * ey) / length2, 0.0, 1.0) : 0.0;
+    const double dx = rx - u * ex, dy = ry - u * ey;
+    if (dx * dx + dy * dy <= kEdgeOffset * kEdgeOffset) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 VerifyResult verifyAgainstReference(const Scene& scene, const Camera& camera, const RenderOptions& options,
@@ -140,6 +176,7 @@ VerifyResult verifyAgainstReference(const Scene& scene, const Camera& camera, co
 
   const algo::CameraSpaceBvh bvh(scene, camera);
   const PlaneDepths planes(scene, camera, options.depthFormat);
+  const dmat4 pixelFromWorld = camera.pixelFromCamera * camera.cameraFromWorld;
   std::vector<uint8_t> wrong(differing.size());
   parallelFor(0, differing.size(), resolveThreads(options.threads), [&](size_t k) {
     const size_t i = differing[k];
@@ -147,7 +184,9 @@ VerifyResult verifyAgainstReference(const Scene& scene, const Camera& camera, co
     const double px = x + 0.5, py = y + 0.5;
     const bool ambiguous =
         depthAmbiguous(planes, scene, options.depthFormat, frame.triangleId[i], reference.triangleId[i], px, py) ||
-        edgeAmbiguous(bvh, scene, options.cull, reference.faceId[i], px, py);
+        edgeAmbiguous(bvh, scene, options.cull, reference.faceId[i], px, py) ||
+        nearTriangleEdge(scene, pixelFromWorld, frame.triangleId[i], px, py) ||
+        nearTriangleEdge(scene, pixelFromWorld, reference.triangleId[i], px, py);
     wrong[k] = !ambiguous;
   });
 

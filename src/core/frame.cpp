@@ -1,4 +1,4 @@
-// Frame buffers and the statistics JSON (keys of CONVENTIONS.md). Consumed by the writers, the
+// Frame buffers and the statistics JSON (keys of docs/conventions.md). Consumed by the writers, the
 // CLI (--stats, --json, bench) and the tests.
 #include <hsr/frame.hpp>
 
@@ -44,6 +44,31 @@ void Stats::addTime(const std::string& stage, double ms) {
   time_ms.emplace_back(stage, ms);
 }
 
+void Stats::setDetail(std::string_view key, Detail value) {
+  for (auto& [k, v] : details)
+    if (k == key) {
+      v = std::move(value);
+      return;
+    }
+  details.emplace_back(key, std::move(value));
+}
+
+void Stats::addDetail(std::string_view key, uint64_t count) {
+  setDetail(key, detailCount(key).value_or(0) + count);
+}
+
+std::optional<uint64_t> Stats::detailCount(std::string_view key) const {
+  for (const auto& [k, v] : details)
+    if (k == key && std::holds_alternative<uint64_t>(v)) return std::get<uint64_t>(v);
+  return std::nullopt;
+}
+
+std::string Stats::detailText(std::string_view key) const {
+  for (const auto& [k, v] : details)
+    if (k == key && std::holds_alternative<std::string>(v)) return std::get<std::string>(v);
+  return {};
+}
+
 std::string Stats::toJson(int indent) const {
   nlohmann::ordered_json j;
   j["algorithm"] = algorithm;
@@ -66,12 +91,14 @@ std::string Stats::toJson(int indent) const {
   nlohmann::ordered_json t = nlohmann::ordered_json::object();
   for (auto& [k, v] : time_ms) t[k] = v;
   j["time_ms"] = t;
-  if (triangles_deferred) j["triangles_deferred"] = *triangles_deferred;
-  if (clusters_deferred) j["clusters_deferred"] = *clusters_deferred;
-  if (triangles_set_up_late) j["triangles_set_up_late"] = *triangles_set_up_late;
-  if (occlusion_passes) j["occlusion_passes"] = *occlusion_passes;
-  if (meshes_culled_occlusion) j["meshes_culled_occlusion"] = *meshes_culled_occlusion;
-  if (triangles_culled_occlusion) j["triangles_culled_occlusion"] = *triangles_culled_occlusion;
+  nlohmann::ordered_json p = nlohmann::ordered_json::object();
+  for (const auto& [k, v] : params) p[k] = v;
+  j["params"] = p;
+  if (!details.empty() && !algorithm.empty()) {
+    nlohmann::ordered_json d = nlohmann::ordered_json::object();
+    for (const auto& [k, v] : details) std::visit([&d, &k](const auto& value) { d[std::string(k)] = value; }, v);
+    j[algorithm] = d;
+  }
   if (wrong_pixels) j["wrong_pixels"] = *wrong_pixels;
   if (ambiguous_pixels) j["ambiguous_pixels"] = *ambiguous_pixels;
   return j.dump(indent);
@@ -135,6 +162,7 @@ void Frame::clear(Rgba8 background, int threads) {
     fill(triangleId, c, -1);
     fill(depth, c, std::numeric_limits<float>::infinity());
     fill(color, c, background);
+    fill(writes, c, WriteCount(0));
   });
 }
 

@@ -1,5 +1,6 @@
-// render(): the algorithm registry and the common frame set-up (buffers, scene counts, total
-// time, --verify against the ray-cast reference). Called by the CLI, the benchmarks and tests.
+// render(): the common frame set-up around every algorithm (its parameters checked, buffers
+// sized, scene counts, total time, --verify against the ray-cast reference). Called by the CLI,
+// the benchmarks and tests; the algorithms themselves are in the registry (algorithms/registry.cpp).
 #include <hsr/render.hpp>
 
 #include "algorithms/algorithms.hpp"
@@ -10,28 +11,22 @@
 
 namespace hsr {
 
-const std::vector<AlgorithmInfo>& algorithms() {
-  static const std::vector<AlgorithmInfo> list = {
-      {"zbuffer", "z-buffer: per-pixel depth test in submission order (000, 001, 003, 004)", algo::zbuffer},
-      {"raycast", "ray casting: one ray per pixel centre, nearest hit in double (001); the exact reference",
-       algo::raycast},
-  };
-  return list;
-}
-
-const AlgorithmInfo* findAlgorithm(const std::string& name) {
-  for (const AlgorithmInfo& a : algorithms())
-    if (a.name == name) return &a;
-  return nullptr;
-}
-
-Stats algo::frameStats(const Scene& scene, const Camera& camera) {
-  Stats st;
+void algo::beginStats(Stats& st, const Scene& scene, const Camera& camera) {
+  // A fresh Stats, but the storage of its lists kept: a warm frame allocates none for them.
+  auto times = std::move(st.time_ms);
+  auto params = std::move(st.params);
+  auto details = std::move(st.details);
+  st = Stats{};
+  st.time_ms = std::move(times);
+  st.params = std::move(params);
+  st.details = std::move(details);
+  st.time_ms.clear();
+  st.params.clear();
+  st.details.clear();
   st.width = camera.width;
   st.height = camera.height;
   st.faces = scene.faceCount();
   st.triangles = scene.triangles.size();
-  return st;
 }
 
 void algo::checkImage(const Camera& camera, DepthFormat format) {
@@ -56,6 +51,7 @@ void render(const Scene& scene, const Camera& camera, const RenderOptions& optio
     for (const AlgorithmInfo& a : algorithms()) names += (names.empty() ? "" : ", ") + a.name;
     throw InputError("--algorithm: unknown algorithm '" + options.algorithm + "' (" + names + ")");
   }
+  const AlgorithmParams params = resolveParams(*algorithm, options.params);
   algo::checkImage(camera, options.depthFormat);
 
   if (options.verify && !has(options.outputs, FrameOutputs::IdsAndDepth))
@@ -63,16 +59,24 @@ void render(const Scene& scene, const Camera& camera, const RenderOptions& optio
                      frameOutputsName(options.outputs) + ") do not keep");
 
   Timer total;
-  frame.stats = algo::frameStats(scene, camera);
+  algo::beginStats(frame.stats, scene, camera);
   // Sized, not cleared: every algorithm writes every pixel (a pass over 33 MB less at 1080p).
   frame.allocate(camera.width, camera.height, options.outputs);
-  algorithm->run(scene, camera, options, frame);
+  if (options.countWrites) frame.writes.assign(size_t(camera.width) * size_t(camera.height), 0);
+  else frame.writes.clear();
+  frame.stats.algorithm = algorithm->name;
+  frame.stats.params = params.entries();
+  algorithm->run(scene, camera, options, params, frame);
+  frame.stats.algorithm = algorithm->name;
+  frame.stats.params = params.entries();
   frame.stats.addTime("total", total.ms());
 
   if (options.verify) {
     RenderOptions refOptions = options;
     refOptions.algorithm = "raycast";
+    refOptions.params.clear();
     refOptions.verify = false;
+    refOptions.countWrites = false;
     Frame reference = render(scene, camera, refOptions);
     Timer verifyTimer;
     VerifyResult v = verifyAgainstReference(scene, camera, options, frame, reference);
@@ -81,6 +85,12 @@ void render(const Scene& scene, const Camera& camera, const RenderOptions& optio
     frame.stats.addTime("verify_reference", reference.stats.time_ms.back().second);
     frame.stats.addTime("verify_compare", verifyTimer.ms());
   }
+}
+
+uint64_t algo::frameBytes(const Frame& frame) {
+  return frame.depth.size() * sizeof(float) + frame.faceId.size() * sizeof(int32_t) +
+         frame.triangleId.size() * sizeof(int32_t) + frame.color.size() * sizeof(Rgba8) +
+         frame.writes.size() * sizeof(WriteCount);
 }
 
 }  // namespace hsr

@@ -121,7 +121,8 @@ void requirePixels(const Frame& frame, size_t count, const char* what, const std
 void checkOutputPath(OutputKind kind, const std::string& path) {
   switch (kind) {
     case OutputKind::Color:
-    case OutputKind::DepthImage: io::requirePng(path); return;
+    case OutputKind::DepthImage:
+    case OutputKind::OverdrawImage: io::requirePng(path); return;
     case OutputKind::FaceIds: io::idFileFormat(path); return;
     case OutputKind::Depth: io::depthFileFormat(path); return;
   }

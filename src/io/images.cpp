@@ -88,4 +88,17 @@ void writeDepthImage(const Frame& frame, const std::string& path) {
   io::writeBytes(io::encodePng(frame.width, frame.height, 1, pixels.data(), path), path);
 }
 
+void writeOverdrawImage(const Frame& frame, const std::string& path) {
+  io::requirePng(path);
+  io::requirePixels(frame, frame.writes.size(), "per-pixel write counts (--overdraw-image)", path);
+  static constexpr uint8_t kScale[8][3] = {{0, 0, 0},     {40, 70, 200},  {40, 170, 80},  {230, 210, 40},
+                                           {240, 140, 30}, {220, 40, 40}, {200, 60, 200}, {255, 255, 255}};
+  std::vector<uint8_t> pixels(frame.writes.size() * 3);
+  for (size_t i = 0; i < frame.writes.size(); ++i) {
+    const uint8_t* c = kScale[std::min<WriteCount>(frame.writes[i], 7)];
+    std::copy(c, c + 3, pixels.begin() + ptrdiff_t(3 * i));
+  }
+  io::writeBytes(io::encodePng(frame.width, frame.height, 3, pixels.data(), path), path);
+}
+
 }  // namespace hsr

@@ -1,0 +1,109 @@
+// The algorithm contract: every visibility algorithm is declared once, with its name, summary,
+// source document, parameters and guarantee, in a registry that the command line (`hsr
+// algorithms`, `--param`), render(), the statistics and the conformance tests all read.
+// Declared in src/algorithms/NAME.cpp; listed in src/algorithms/registry.cpp.
+#pragma once
+#include <hsr/frame.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace hsr {
+
+struct Scene;
+struct Camera;
+struct RenderOptions;
+
+/// The type of an algorithm parameter, as `--param key=value` parses it.
+enum class ParamType : uint8_t {
+  Choice,  // one of ParamSpec::choices
+  Int,     // a whole number in [min, max]
+  Real,    // a finite number in [min, max]
+  Bool,    // on|off (also true|false, 1|0)
+};
+
+/// One parameter of an algorithm.
+struct ParamSpec {
+  std::string name;          // lower case, words joined by '-': "sort-key"
+  ParamType type = ParamType::Choice;
+  std::string defaultValue;  // as the user would write it
+  std::vector<std::string> choices;  // Choice: the allowed values
+  double min = -1e300, max = 1e300;  // Int, Real: the allowed range (inclusive)
+  std::string help;
+};
+
+/// What an algorithm promises about its image against the exact reference (raycast): the
+/// conformance tests check exactly this, and `hsr algorithms` prints it.
+struct Guarantee {
+  enum class Kind : uint8_t {
+    Exact,          // no wrong pixel (differences only where verify finds them ambiguous)
+    ExactWhen,      // exact whenever `holds` is true; otherwise wrong pixels are reported, not failed
+    Approximate,    // wrong pixels at most maxWrongFraction of the covered pixels
+    FailsByDesign,  // wrong pixels > 0 on each scene of failsOn (with its own camera), 0 elsewhere
+  };
+  Kind kind = Kind::Exact;
+  /// ExactWhen: the condition; Approximate: what is bounded; FailsByDesign: why it fails.
+  std::string condition;
+  /// ExactWhen: whether the condition holds for a scene, camera and options.
+  std::function<bool(const Scene&, const Camera&, const RenderOptions&)> holds;
+  double maxWrongFraction = 0;        // Approximate
+  std::vector<std::string> failsOn;   // FailsByDesign: scene names as loadScene takes them
+
+  /// One line: "exact", "exact when ...", "approximate: ...", "fails by design on ...".
+  std::string describe() const;
+};
+
+/// The parameters an algorithm runs with: every declared parameter, given or defaulted, checked
+/// against its ParamSpec, in declaration order.
+class AlgorithmParams {
+ public:
+  AlgorithmParams() = default;
+  /// The value of parameter `name` as text (throws std::logic_error for an undeclared name).
+  const std::string& text(const std::string& name) const;
+  int64_t integer(const std::string& name) const;
+  double real(const std::string& name) const;
+  bool flag(const std::string& name) const;
+  /// (name, value) in declaration order: what the statistics record as "params".
+  const std::vector<std::pair<std::string, std::string>>& entries() const { return entries_; }
+
+ private:
+  friend AlgorithmParams resolveParams(const struct AlgorithmInfo&, const std::map<std::string, std::string>&);
+  std::vector<std::pair<std::string, std::string>> entries_;
+};
+
+/// A visibility algorithm's entry point: fills frame.faceId/triangleId/depth/color (those sized)
+/// and frame.stats, from a finalized scene and a resolved camera. render() sizes the frame (not
+/// cleared), starts its statistics (image size, scene counts) and records the parameters.
+using AlgorithmFn =
+    std::function<void(const Scene&, const Camera&, const RenderOptions&, const AlgorithmParams&, Frame&)>;
+
+/// An algorithm as the registry holds it.
+struct AlgorithmInfo {
+  std::string name;     // what --algorithm takes
+  std::string summary;  // one line
+  std::string source;   // the documents it comes from (docs/references.md names)
+  std::vector<ParamSpec> params;
+  Guarantee guarantee;
+  /// Fills Frame::writes when RenderOptions::countWrites is set (the overdraw picture), or throws
+  /// InputError when it cannot with these parameters.
+  AlgorithmFn run;
+};
+
+/// Every registered algorithm, in the order `hsr algorithms` lists them.
+const std::vector<AlgorithmInfo>& algorithms();
+/// The algorithm named `name`, or null.
+const AlgorithmInfo* findAlgorithm(const std::string& name);
+/// Adds an algorithm to the registry (for tests and embedders; call before rendering, from one
+/// thread). Throws std::invalid_argument when the name is taken or the declaration is malformed.
+void registerAlgorithm(AlgorithmInfo info);
+/// Checks `given` (parameter name -> text) against the algorithm's declaration and fills in the
+/// defaults. Throws InputError "--param NAME=VALUE: ..." for an unknown name or a bad value.
+AlgorithmParams resolveParams(const AlgorithmInfo& algorithm, const std::map<std::string, std::string>& given);
+/// "choice", "int", "real", "bool".
+const char* paramTypeName(ParamType type);
+
+}  // namespace hsr

@@ -1,0 +1,256 @@
+// The drawing service (draw.hpp): fragments of set-up triangles, in the caller's order, applied
+// to the frame under a write rule, then resolved into face ids, exact eye depths and colours.
+#include "algorithms/draw.hpp"
+
+#include <algorithm>
+
+#include "algorithms/algorithms.hpp"
+#include "core/depth_map.hpp"
+#include "core/parallel.hpp"
+#include "core/shading.hpp"
+#include "core/timer.hpp"
+#include "raster/fragment_depth.hpp"
+#include "raster/halfspace.hpp"
+#include "raster/scanline.hpp"
+
+namespace hsr::algo {
+namespace {
+
+constexpr int kBinTile = 64;  // the Binned rasterizer's tile side, in pixels
+
+// `src` composited over `dst` with src's alpha (the "over" operator, 8 bits, rounded).
+Rgba8 over(Rgba8 src, Rgba8 dst) {
+  const unsigned a = src.a, keep = 255 - a;
+  auto mix = [&](uint8_t s, uint8_t d) { return uint8_t((s * a + d * keep + 127) / 255); };
+  return {mix(src.r, dst.r), mix(src.g, dst.g), mix(src.b, dst.b), uint8_t(a + (dst.a * keep + 127) / 255)};
+}
+
+// One frame's per-pixel state and the rule's work on it, for depth storage S and mapping M
+// (used by DepthTest only; the other rules keep no depth buffer).
+template <WriteRule R, DepthStorage S, DepthMapping M>
+class FragmentWriter {
+ public:
+  using T = DepthT<S>;
+
+  FragmentWriter(std::span<const SetupTriangle> tris, const Camera& cam, const RenderOptions& opt,
+                 const TriangleShader& shade, Frame& frame)
+      : tris_(tris), cam_(cam), opt_(opt), shade_(shade), frame_(frame),
+        keepWinner_(R != WriteRule::DepthTest || opt.outputs != FrameOutputs::DepthOnly),
+        color_(has(opt.outputs, FrameOutputs::Color)),
+        clear_(quantizeDepth<S>(opt.depthFormat.clearValue())) {
+    const size_t pixels = size_t(cam.width) * size_t(cam.height);
+    if constexpr (R == WriteRule::DepthTest) depth_.assign(pixels, clear_);
+    if (keepWinner_) winner_.assign(pixels, 0);
+  }
+
+  uint64_t bytes() const { return depth_.size() * sizeof(T) + winner_.size() * sizeof(uint32_t); }
+
+  // Every fragment of triangle i inside pixels [x0, x1] x [y0, y1], through the rule.
+  void draw(uint32_t i, DrawRaster raster, int x0, int y0, int x1, int y1, DrawCounters& n) {
+    SetupTriangle t = tris_[i];
+    t.minX = int16_t(std::max<int>(t.minX, x0));
+    t.minY = int16_t(std::max<int>(t.minY, y0));
+    t.maxX = int16_t(std::min<int>(t.maxX, x1));
+    t.maxY = int16_t(std::min<int>(t.maxY, y1));
+    if (t.minX > t.maxX || t.minY > t.maxY) return;
+    const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, cam_.near, cam_.far, cam_.orthographic);
+    if (raster == DrawRaster::Scanline) {
+      // The eye depth stepped along the span, mapped and stored (the lecture notes' inner loop).
+      rasterizeScanline(t, [&](int x, int y, double eyeDepth) {
+        apply(i, x, y, [&] { return quantizeDepth<S>(mapDepth<M>(eyeDepth, cam_.near, cam_.far, cam_.orthographic)); }, n);
+      });
+    } else {
+      // The stored value from the plane at the pixel centre, as the tiled kernel computes it.
+      rasterizeHalfSpace(t, [&](int x, int y, double) {
+        apply(i, x, y, [&] { return T(fragmentStored<S>(m, x + 0.5, m.p.b * (y + 0.5), m.q.b * (y + 0.5))); }, n);
+      });
+    }
+  }
+
+  // Face ids, exact eye depths and colours of rows [y0, y1) from the last fragment written to
+  // each pixel; depth only under the depth test: the eye depth of the stored value.
+  void resolveRows(int y0, int y1, DrawCounters& n) {
+    const bool faceIds = has(opt_.outputs, FrameOutputs::FaceIds);
+    const bool triangleIds = has(opt_.outputs, FrameOutputs::TriangleIds);
+    for (int y = y0; y < y1; ++y)
+      for (int x = 0; x < cam_.width; ++x) {
+        const size_t idx = frame_.index(x, y);
+        if (!keepWinner_) {
+          if (depth_[idx] == clear_) continue;
+          frame_.depth[idx] = float(eyeDepthOfStored<S, M>(double(depth_[idx]), cam_.near, cam_.far, cam_.orthographic));
+        } else {
+          if (!winner_[idx]) continue;
+          const SetupTriangle& t = tris_[winner_[idx] - 1];
+          if (faceIds) frame_.faceId[idx] = int32_t(t.face);
+          if (triangleIds) frame_.triangleId[idx] = int32_t(t.triangle);
+          frame_.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
+          // (Blend composited its colours as it drew; the others show the last written.)
+          if (color_ && R != WriteRule::Blend) frame_.color[idx] = triangleColor(t, shade_);
+        }
+        ++n.covered;
+      }
+  }
+
+ private:
+  // One fragment of triangle i at pixel (x, y); `stored()` gives its depth value when the rule
+  // needs one.
+  template <class Stored>
+  void apply(uint32_t i, int x, int y, Stored&& stored, DrawCounters& n) {
+    const size_t idx = frame_.index(x, y);
+    if constexpr (R == WriteRule::DepthTest) {
+      constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
+      const T z = stored();
+      ++n.depthTests;
+      if (!(greater ? z > depth_[idx] : z < depth_[idx])) return;  // strictly nearer: ties keep the first
+      depth_[idx] = z;
+      ++n.depthWrites;
+    } else if constexpr (R == WriteRule::WhereUnwritten) {
+      if (winner_[idx]) return;
+    }
+    if (keepWinner_) winner_[idx] = i + 1;
+    if (color_) {
+      ++n.colorWrites;
+      if constexpr (R == WriteRule::Blend) frame_.color[idx] = over(triangleColor(tris_[i], shade_), frame_.color[idx]);
+    }
+    if (!frame_.writes.empty()) ++frame_.writes[idx];
+  }
+
+  std::span<const SetupTriangle> tris_;
+  const Camera& cam_;
+  const RenderOptions& opt_;
+  const TriangleShader& shade_;
+  Frame& frame_;
+  const bool keepWinner_, color_;
+  const T clear_;
+  std::vector<T> depth_;          // DepthTest: the stored values
+  std::vector<uint32_t> winner_;  // per pixel: 1 + the index of the last fragment's triangle, 0 = none
+};
+
+// Per tile of kBinTile pixels, the triangles whose box meets it, in drawing order.
+std::vector<std::vector<uint32_t>> binTriangles(std::span<const SetupTriangle> tris, int tilesX, int tilesY) {
+  std::vector<std::vector<uint32_t>> bins(size_t(tilesX) * size_t(tilesY));
+  for (uint32_t i = 0; i < tris.size(); ++i) {
+    const SetupTriangle& t = tris[i];
+    for (int ty = t.minY / kBinTile; ty <= t.maxY / kBinTile; ++ty)
+      for (int tx = t.minX / kBinTile; tx <= t.maxX / kBinTile; ++tx) bins[size_t(ty) * size_t(tilesX) + size_t(tx)].push_back(i);
+  }
+  return bins;
+}
+
+// The frame drawn and resolved by one writer: on one thread over the whole image, or binned,
+// tile by tile on the pool (each tile's pixels are its own; counters summed in tile order).
+template <WriteRule R, DepthStorage S, DepthMapping M>
+uint64_t drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const Camera& cam, const RenderOptions& opt,
+                  const TriangleShader& shade, Frame& frame, DrawCounters& counters) {
+  FragmentWriter<R, S, M> writer(tris, cam, opt, shade, frame);
+  const int threads = resolveThreads(opt.threads);
+  if (raster != DrawRaster::Binned) {
+    for (uint32_t i = 0; i < tris.size(); ++i) writer.draw(i, raster, 0, 0, cam.width - 1, cam.height - 1, counters);
+    writer.resolveRows(0, cam.height, counters);
+    return writer.bytes();
+  }
+  const int tilesX = (cam.width + kBinTile - 1) / kBinTile, tilesY = (cam.height + kBinTile - 1) / kBinTile;
+  const std::vector<std::vector<uint32_t>> bins = binTriangles(tris, tilesX, tilesY);
+  std::vector<DrawCounters> perTile(bins.size());
+  parallelFor(0, bins.size(), threads, [&](size_t tile) {
+    const int x0 = int(tile % size_t(tilesX)) * kBinTile, y0 = int(tile / size_t(tilesX)) * kBinTile;
+    for (uint32_t i : bins[tile])
+      writer.draw(i, DrawRaster::HalfSpace, x0, y0, std::min(x0 + kBinTile, cam.width) - 1,
+                  std::min(y0 + kBinTile, cam.height) - 1, perTile[tile]);
+  });
+  std::vector<DrawCounters> perRow(size_t(cam.height));
+  parallelFor(0, size_t(cam.height), threads, [&](size_t y) { writer.resolveRows(int(y), int(y) + 1, perRow[y]); });
+  for (const DrawCounters& c : perTile) counters.add(c);
+  for (const DrawCounters& c : perRow) counters.add(c);
+  uint64_t binBytes = 0;
+  for (const auto& b : bins) binBytes += b.capacity() * sizeof(uint32_t);
+  return writer.bytes() + binBytes;
+}
+
+}  // namespace
+
+const char* writeRuleName(WriteRule rule) {
+  switch (rule) {
+    case WriteRule::DepthTest: return "depth-test";
+    case WriteRule::Overwrite: return "overwrite";
+    case WriteRule::WhereUnwritten: return "where-unwritten";
+    case WriteRule::Blend: return "blend";
+  }
+  return "?";
+}
+
+const char* drawRasterName(DrawRaster raster) {
+  switch (raster) {
+    case DrawRaster::HalfSpace: return "halfspace";
+    case DrawRaster::Scanline: return "scanline";
+    case DrawRaster::Binned: return "binned";
+  }
+  return "?";
+}
+
+ParamSpec drawRasterParam(const char* defaultValue) {
+  return {"raster", ParamType::Choice, defaultValue, {"halfspace", "scanline", "binned"}, -1e300, 1e300,
+          "fragments from the scalar half-space rasterizer on one thread (the reference), the lecture notes' "
+          "scanline rasterizer, or the half-space rasterizer binned into 64x64 tiles on threads"};
+}
+
+DrawRaster drawRasterOf(const AlgorithmParams& params) {
+  const std::string& name = params.text("raster");
+  return name == "scanline" ? DrawRaster::Scanline : name == "binned" ? DrawRaster::Binned : DrawRaster::HalfSpace;
+}
+
+uint64_t drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawRaster raster, const Camera& camera,
+                     const RenderOptions& options, const TriangleShader& shade, Frame& frame, DrawCounters& counters) {
+  frame.clear(options.background, resolveThreads(options.threads));
+  auto withRule = [&]<WriteRule R>() {
+    uint64_t bytes = 0;
+    if constexpr (R == WriteRule::DepthTest)
+      visitDepthFormat(options.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
+        bytes = drawWith<R, S, M>(triangles, raster, camera, options, shade, frame, counters);
+      });
+    else  // no depth buffer: one instance
+      bytes = drawWith<R, DepthStorage::F32, DepthMapping::Reversed>(triangles, raster, camera, options, shade, frame,
+                                                                     counters);
+    return bytes;
+  };
+  switch (rule) {
+    case WriteRule::DepthTest: return withRule.template operator()<WriteRule::DepthTest>();
+    case WriteRule::Overwrite: return withRule.template operator()<WriteRule::Overwrite>();
+    case WriteRule::WhereUnwritten: return withRule.template operator()<WriteRule::WhereUnwritten>();
+    case WriteRule::Blend: return withRule.template operator()<WriteRule::Blend>();
+  }
+  return 0;
+}
+
+void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& options, WriteRule rule,
+               DrawRaster raster, const OrderFn& order, Frame& frame) {
+  Timer timer;
+  Stats& st = frame.stats;
+  const TriangleShader shade(scene, camera, options.shading);
+  FrontEndOutput fe;
+  runFrontEnd(scene, camera, options, fe);
+  std::vector<SetupTriangle> triangles = fe.flatten();
+  st.addTime("frontend", timer.lap());
+  if (order) {
+    order(triangles);
+    st.addTime("order", timer.lap());
+  }
+  DrawCounters n;
+  const uint64_t bufferBytes = drawOrdered(triangles, rule, raster, camera, options, shade, frame, n);
+  st.addTime("raster", timer.lap());
+
+  if (rule == WriteRule::DepthTest) st.depth_format = options.depthFormat.name();
+  st.triangles_clipped = fe.clipped;
+  st.triangles_degenerate = fe.degenerate;
+  st.culled_backface = fe.culledBackface;
+  st.culled_frustum = fe.culledFrustum;
+  st.depth_tests = n.depthTests;
+  st.depth_writes = n.depthWrites;
+  st.color_writes = n.colorWrites;
+  st.covered_pixels = n.covered;
+  st.memory_bytes = bufferBytes + triangles.capacity() * sizeof(SetupTriangle) + fe.memoryBytes() + frameBytes(frame);
+  st.setDetail("rasterizer", drawRasterName(raster));
+  st.setDetail("write_rule", writeRuleName(rule));
+}
+
+}  // namespace hsr::algo

@@ -1,0 +1,70 @@
+// The drawing service every algorithm composes: set-up triangles drawn in a given order under a
+// write rule, on a scalar rasterizer (one thread, the reference) or binned into tiles that
+// threads own, with the counters of the statistics counted one way for everyone. A list-priority
+// algorithm orders (and splits) faces and calls drawScene; the textbook z-buffer is drawScene in
+// submission order with the depth test. Runs on the caller's thread and the pool (core/parallel.hpp).
+#pragma once
+#include <hsr/algorithm.hpp>
+#include <hsr/render.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <vector>
+
+#include "frontend/frontend.hpp"
+
+namespace hsr::algo {
+
+/// What a fragment does to its pixel.
+enum class WriteRule : uint8_t {
+  DepthTest,       // the z-buffer: written where strictly nearer than the stored depth (ties keep the first)
+  Overwrite,       // the painter's: every fragment overwrites; no depth buffer
+  WhereUnwritten,  // the reverse painter's: written only where nothing was written yet
+  Blend,           // transparency: the colour composited over by the triangle's alpha; ids and depth overwritten
+};
+const char* writeRuleName(WriteRule rule);
+
+/// How fragments are produced. Every rasterizer covers the same pixel centres (edge functions,
+/// top-left rule); HalfSpace and Binned compute the same depth at each, Scanline steps it along spans.
+enum class DrawRaster : uint8_t {
+  HalfSpace,  // the scalar half-space rasterizer over the whole frame, on one thread (the reference)
+  Scanline,   // the lecture notes' scanline rasterizer, depth stepped by the plane equation, one thread
+  Binned,     // the half-space rasterizer per 64x64 tile, tiles on threads (the same bits as HalfSpace)
+};
+const char* drawRasterName(DrawRaster raster);
+/// The `raster` parameter of an algorithm that draws through the service, and its value.
+ParamSpec drawRasterParam(const char* defaultValue);
+DrawRaster drawRasterOf(const AlgorithmParams& params);
+
+/// The counters of the statistics, as every algorithm counts them.
+struct DrawCounters {
+  uint64_t depthTests = 0;   // z comparisons (DepthTest only)
+  uint64_t depthWrites = 0;  // depth values stored (DepthTest only)
+  uint64_t colorWrites = 0;  // fragments that wrote a pixel's colour (0 when the frame keeps no colour)
+  uint64_t covered = 0;      // pixels showing a surface at the end
+  void add(const DrawCounters& o) {
+    depthTests += o.depthTests;
+    depthWrites += o.depthWrites;
+    colorWrites += o.colorWrites;
+    covered += o.covered;
+  }
+};
+
+/// Draws `triangles` in their order into `frame` (sized by render(); cleared here) under `rule`
+/// and adds to `counters`; Frame::writes, when sized, gets each pixel's written fragments.
+/// Returns the bytes of the buffers it used.
+uint64_t drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawRaster raster, const Camera& camera,
+                     const RenderOptions& options, const TriangleShader& shade, Frame& frame, DrawCounters& counters);
+
+/// Puts the set-up triangles (submission order on entry) into drawing order.
+using OrderFn = std::function<void(std::vector<SetupTriangle>& triangles)>;
+
+/// A whole frame: the front end sets up the scene's triangles in submission order, `order` (if
+/// any) reorders them, drawOrdered draws them; the statistics common to every algorithm are
+/// filled (front-end counts, counters, memory, times "frontend", "order", "raster"), and the
+/// details "rasterizer" and "write_rule".
+void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& options, WriteRule rule,
+               DrawRaster raster, const OrderFn& order, Frame& frame);
+
+}  // namespace hsr::algo
