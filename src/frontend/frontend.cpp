@@ -434,8 +434,8 @@ class ChunkSetUp {
 
   // The run of triangles the loop in segment() is in: one mesh's, or those between meshes.
   struct MeshRun {
-    size_t mesh;           // the first mesh not wholly before the run
-    size_t end;            // the run ends before this triangle
+    size_t mesh;             // the first mesh not wholly before the run
+    size_t end;              // the run ends before this triangle
     bool unclipped = false;  // a mesh whose vertices are all inside the clip volume
   };
 
@@ -445,12 +445,10 @@ class ChunkSetUp {
   void segment(const size_t begin, const size_t end) {
     const std::vector<MeshRange>& meshes = in_.scene.meshes;
     // The first mesh not wholly before `begin` (meshes are in triangle order).
-    MeshRun run{size_t(std::partition_point(meshes.begin(), meshes.end(),
-                                            [&](const MeshRange& m) {
-                                              return size_t(m.firstTriangle) + m.triangleCount <= begin;
-                                            }) -
-                       meshes.begin()),
-                begin};
+    const auto firstMesh = std::partition_point(meshes.begin(), meshes.end(), [&](const MeshRange& m) {
+      return size_t(m.firstTriangle) + m.triangleCount <= begin;
+    });
+    MeshRun run{size_t(firstMesh - meshes.begin()), begin};
     for (size_t ti = begin; ti < end; ++ti) {
       if (ti >= run.end) nextRun(ti, end, run);
       const Triangle& tri = in_.scene.triangles[ti];
@@ -744,8 +742,8 @@ void runSetUp(const Scene& scene, const Camera& cam, const RenderOptions& option
   const size_t per = out.chunkTriangles;
   out.chunkCount = (nt + per - 1) / per;
   if (out.chunks.size() < out.chunkCount) out.chunks.resize(out.chunkCount);
-  const SetUpInputs in{scene,     cam, options, shade, vertices, out.meshUnclipped.data(), frontEnd.nearestFor,
-                       defer,     view.enabled ? &view : nullptr, has(options.outputs, FrameOutputs::Color)};
+  const SetUpInputs in{scene, cam, options, shade, vertices, out.meshUnclipped.data(), frontEnd.nearestFor, defer,
+                       view.enabled ? &view : nullptr, has(options.outputs, FrameOutputs::Color)};
   parallelFor(0, out.chunkCount, threads, [&](size_t c) {
     FrontEndChunk& chunk = out.chunks[c];
     chunk.counters = FrontEndCounters{};

@@ -591,7 +591,9 @@ HWY_INLINE void WriteRecords(const LaneGroup& g, unsigned survivorBits, const La
   const size_t N = hn::Lanes(d);
   // (Every value converted is an integer well inside int32: exact. Lane j of a 64-bit word
   // pair (a, b) holds a in its low half.)
-  auto pairs = [](__m128i a, __m128i b) { return _mm256_set_m128i(_mm_unpackhi_epi32(a, b), _mm_unpacklo_epi32(a, b)); };
+  auto pairs = [](__m128i a, __m128i b) {
+    return _mm256_set_m128i(_mm_unpackhi_epi32(a, b), _mm_unpacklo_epi32(a, b));
+  };
   auto int32 = [](V v) { return _mm256_cvtpd_epi32(v.raw); };
   const __m128i x0 = int32(g.X[0]), x1 = int32(g.X[1]), x2 = int32(g.X[2]);
   const __m128i y0 = int32(g.Y[0]), y1 = int32(g.Y[1]), y2 = int32(g.Y[2]);
@@ -618,10 +620,10 @@ HWY_INLINE void WriteRecords(const LaneGroup& g, unsigned survivorBits, const La
   const __m128i flags32 = _mm_or_si128(int32(hn::IfThenElseZero(g.front, hn::Set(d, 1.0))),
                                        _mm_slli_epi32(int32(g.coverage), 16));
   auto asInt = [](V v) { return _mm256_castpd_si256(v.raw); };
-  const __m256i word[12] = {pairs(x0, x1),          pairs(x2, y0),          pairs(y1, y2),
-                            pairs(minXY, maxXY),    asInt(g.depthNum.a),    asInt(g.depthNum.b),
-                            asInt(g.depthNum.c),    asInt(g.depthDen.a),    asInt(g.depthDen.b),
-                            asInt(g.depthDen.c),    pairs(tris, faces),     _mm256_cvtepu32_epi64(flags32)};
+  const __m256i word[12] = {pairs(x0, x1),       pairs(x2, y0),       pairs(y1, y2),
+                            pairs(minXY, maxXY), asInt(g.depthNum.a), asInt(g.depthNum.b),
+                            asInt(g.depthNum.c), asInt(g.depthDen.a), asInt(g.depthDen.b),
+                            asInt(g.depthDen.c), pairs(tris, faces),  _mm256_cvtepu32_epi64(flags32)};
   // Three 4x4 transposes: row[k][j] holds words 4 k to 4 k + 3 of lane j's record.
   __m256i row[3][4];
   for (int k = 0; k < 3; ++k) {
