@@ -35,7 +35,7 @@ const Prepared& prepared(const std::string& name) {
   p.camera = resolveCamera(p.scene.camera ? *p.scene.camera : frameBounds(p.scene.bounds()), kWidth, kHeight,
                            p.scene.bounds());
   const DepthSetup depth{DepthFormat{}, p.camera.near, p.camera.far, p.camera.orthographic};
-  runFrontEnd(p.scene, p.camera, RenderOptions{}, p.fe, {}, &depth);
+  runFrontEnd(p.scene, p.camera, RenderOptions{}, p.fe, {}, {.nearestFor = &depth});
   return p;
 }
 
@@ -49,7 +49,7 @@ void BM_FrontEnd(benchmark::State& state) {
   const DepthSetup depth{DepthFormat{}, p.camera.near, p.camera.far, p.camera.orthographic};
   FrontEndOutput fe;
   for (auto _ : state) {
-    runFrontEnd(p.scene, p.camera, RenderOptions{}, fe, {}, &depth);
+    runFrontEnd(p.scene, p.camera, RenderOptions{}, fe, {}, {.nearestFor = &depth});
     benchmark::DoNotOptimize(fe.chunks.data());
   }
   state.SetLabel(kScenes[state.range(0)]);
@@ -84,7 +84,7 @@ void BM_RasterTiles(benchmark::State& state) {
   const DepthSetup depth{DepthFormat::parse(kFormats[state.range(1)]), p.camera.near, p.camera.far,
                          p.camera.orthographic};
   FrontEndOutput fe;  // the nearest bounds are the format's
-  runFrontEnd(p.scene, p.camera, RenderOptions{}, fe, {}, &depth);
+  runFrontEnd(p.scene, p.camera, RenderOptions{}, fe, {}, {.nearestFor = &depth});
   tiled::Bins bins;
   binAll(fe, bins);
   auto scratch = std::make_unique<tiled::TileScratch>();

@@ -352,7 +352,7 @@ TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
       }
       const uint32_t* vertex[3] = {index[0].data(), index[1].data(), index[2].data()};
       batch.resize(setupBatch(vertices.data(), vertex, tri.data(), face.data(), tri.size(), cam, cull, batchCounts,
-                              batch.data(), nullptr, nullptr, nullptr, nullptr, cullFirst));
+                              batch.data(), {.cullFirst = cullFirst}));
       const std::string what = std::string(hwy::TargetName(target)) + " cull " + std::to_string(int(cull)) +
                                (cullFirst ? " facing test first" : "");
       ASSERT_EQ(scalar.size(), batch.size()) << what;

@@ -47,7 +47,7 @@ struct BinnedScene {
       : scene(loadScene(spec)),
         cam(resolveCamera(*scene.camera, width, height, scene.bounds())),
         depth{DepthFormat{}, cam.near, cam.far, cam.orthographic} {
-    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
+    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, {.nearestFor = &depth});
     tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
     for (size_t c = 0; c < fe.chunkCount; ++c) tiled::binChunk(bins, c, fe.chunks[c]);
   }
@@ -276,7 +276,7 @@ TEST(Tiled, PerTileChunkListsNameEveryChunkWithItemsThere) {
   const Camera cam = resolveCamera(frameBounds(scene.bounds()), 320, 240, scene.bounds());
   const DepthSetup depth{DepthFormat{}, cam.near, cam.far, cam.orthographic};
   FrontEndOutput fe;
-  runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth, true);
+  runFrontEnd(scene, cam, RenderOptions{}, fe, {}, {.nearestFor = &depth, .deferBackFaces = true});
   ASSERT_GT(fe.chunkCount, 4u);
   tiled::Bins bins;
   tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
@@ -360,7 +360,7 @@ TEST(Tiled, BinsAreInSubmissionOrderWhateverTheChunkOrder) {
   const Camera cam = resolveCamera(frameBounds(scene.bounds()), 300, 200, scene.bounds());
   const DepthSetup depth{DepthFormat{}, cam.near, cam.far, cam.orthographic};
   FrontEndOutput fe;
-  runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
+  runFrontEnd(scene, cam, RenderOptions{}, fe, {}, {.nearestFor = &depth});
   ASSERT_GT(fe.chunkCount, 2u);
   ASSERT_GT(fe.triangleCount(), 8000u);
   auto binned = [&](bool reverse) {
@@ -587,7 +587,7 @@ TEST(Tiled, TrianglesBehindATriangleCoveringTheTileAreNotBinned) {
   for (const char* f : {"f32:reversed", "u16:z", "u24:inv", "u32:linear"}) {
     const DepthSetup depth{DepthFormat::parse(f), cam.near, cam.far, cam.orthographic};
     FrontEndOutput fe;
-    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
+    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, {.nearestFor = &depth});
     ASSERT_EQ(fe.chunkCount, 1u);
     tiled::Bins all, culled;
     tiled::prepareBins(all, cam.width, cam.height, fe.chunkCount);
@@ -725,13 +725,13 @@ TEST(Tiled, UnclippedMeshesAreSetUpAsTriangleByTriangle) {
       EXPECT_EQ(gotNearest[i], expectedNearest[i]) << at;
     }
   };
-  runSetUp(scene, cam, opt, vertices, fe, {}, &depth);
+  runSetUp(scene, cam, opt, vertices, fe, {}, {.nearestFor = &depth});
   EXPECT_EQ(fe.meshUnclipped, (std::vector<uint8_t>{1, 0, 1}));
   EXPECT_GT(fe.clipped, 0u);  // the middle mesh went through clipping
   check({0, 2}, "whole scene");
   const std::vector<TriangleRange> only = {{scene.meshes[2].firstTriangle,
                                             scene.meshes[2].firstTriangle + scene.meshes[2].triangleCount}};
-  runSetUp(scene, cam, opt, vertices, fe, {}, &depth, false, true, &only);
+  runSetUp(scene, cam, opt, vertices, fe, {}, {.nearestFor = &depth, .only = &only});
   EXPECT_EQ(fe.meshUnclipped, (std::vector<uint8_t>{0, 0, 1}));  // (only the meshes set up are tested)
   EXPECT_EQ(fe.clipped, 0u);
   check({2}, "mesh 2 only");
@@ -751,7 +751,7 @@ TEST(Tiled, OrderTileVisitsByEyeDepthInEveryMapping) {
   for (const char* f : {"f32:z", "u24:z", "f32:reversed", "u32:inv", "f32:linear", "u16:reversed"}) {
     const DepthSetup depth{DepthFormat::parse(f), cam.near, cam.far, cam.orthographic};
     FrontEndOutput fe;
-    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
+    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, {.nearestFor = &depth});
     ASSERT_EQ(fe.triangleCount(), 3u) << f;
     tiled::Bins bins;
     tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
@@ -798,7 +798,7 @@ TEST(Tiled, OrderTileLeavesManySmallTrianglesInSubmissionOrder) {
     const Camera cam = oneTileCamera(scene, 1, 2000, 45);
     const DepthSetup depth{DepthFormat::parse("f32:reversed"), cam.near, cam.far, cam.orthographic};
     FrontEndOutput fe;
-    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
+    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, {.nearestFor = &depth});
     ASSERT_EQ(fe.triangleCount(), size_t(kCount)) << small;
     tiled::Bins bins;
     tiled::prepareBins(bins, cam.width, cam.height, fe.chunkCount);
@@ -858,7 +858,7 @@ TEST(Tiled, EqualDepthGoesToTheTriangleSubmittedFirstWhateverTheVisitOrder) {
     const DepthSetup depth{DepthFormat::parse(f), cam.near, cam.far, cam.orthographic};
     const bool greater = depth.format.mapping == DepthMapping::Reversed || depth.format.mapping == DepthMapping::Inv;
     FrontEndOutput fe;
-    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth);
+    runFrontEnd(scene, cam, RenderOptions{}, fe, {}, {.nearestFor = &depth});
     ASSERT_EQ(fe.triangleCount(), 2u);
     std::vector<double>& nearest = fe.chunks[0].nearest;
     ASSERT_GT(nearest[0], 0) << f;
@@ -913,7 +913,7 @@ TEST(Tiled, DeferredBackFaceTiesGoToTheTriangleSubmittedFirst) {
       const DepthFormat format = DepthFormat::parse(f);
       const DepthSetup depth{format, cam.near, cam.far, cam.orthographic};
       FrontEndOutput fe;
-      runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth, true);
+      runFrontEnd(scene, cam, RenderOptions{}, fe, {}, {.nearestFor = &depth, .deferBackFaces = true});
       ASSERT_EQ(fe.chunks[0].triangles.size(), 1u) << f;
       ASSERT_EQ(fe.chunks[0].deferred.size(), 1u) << f;  // the back face
       EXPECT_EQ(fe.chunks[0].deferred[0].face, backFirst ? 0u : 1u) << f;
@@ -941,7 +941,7 @@ TEST(Tiled, DeferredClusterBoundsEveryTriangle) {
       for (const DepthFormat& format : allFormats()) {
         const DepthSetup depth{format, cam.near, cam.far, cam.orthographic};
         FrontEndOutput fe;
-        runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth, true);
+        runFrontEnd(scene, cam, RenderOptions{}, fe, {}, {.nearestFor = &depth, .deferBackFaces = true});
         const bool greater = format.greaterWins();
         for (size_t k = 0; k < fe.chunkCount; ++k)
           for (const DeferredCluster& dc : fe.chunks[k].clusters) {
@@ -1058,7 +1058,7 @@ TEST(Tiled, DeferredBackFacesChangeNoBit) {
         const DepthFormat format = DepthFormat::parse(f);
         const DepthSetup depth{format, cam.near, cam.far, cam.orthographic};
         FrontEndOutput fe;
-        runFrontEnd(scene, cam, RenderOptions{}, fe, {}, &depth, true);
+        runFrontEnd(scene, cam, RenderOptions{}, fe, {}, {.nearestFor = &depth, .deferBackFaces = true});
         std::set<int32_t> deferred;  // scene triangles
         size_t clusters = 0;
         for (size_t k = 0; k < fe.chunkCount; ++k) {

@@ -60,8 +60,8 @@ struct TriangleCluster {
   double maxEdge = 0;    // the longest edge of its triangles
   bool usable = false;   // full, in one mesh, every triangle well shaped, cosCone >= 1/2
 };
-// (32 rather than 64: tighter boxes, so fewer clusters set up in the tile pass near a silhouette;
-// sphere 1.02x by minimum, full frame, 2 threads and 1; --cull back and depth only unchanged.)
+// (32 rather than 64: tighter boxes, so fewer clusters set up in the tile pass near a
+// silhouette; see docs/benchmarks.md.)
 inline constexpr size_t kClusterTriangles = 32;
 
 /// What the loader or finalize() found wrong and how it was handled. Counted, never fatal:

@@ -28,20 +28,18 @@ namespace {
 // Every fragment it would draw fails the depth test there, whatever else is drawn later (stored
 // values only come nearer): the same depth, bit for bit. The first pass draws the meshes that
 // cannot be bounded and the nearest kPassShare-th of the others (by their boxes' least depth),
-// at least kPassMeshes; the last pass, every mesh left. (City at 1920x1080, 2 threads: 2
-// passes of 1/20 faster than 1/10, 1/30 or 3 to 4 passes: each tile pass has its cost.)
+// at least kPassMeshes; the last pass, every mesh left. (Two passes, the first of a 20th, were
+// faster than other shares or more passes, each tile pass having its cost: see
+// docs/benchmarks.md.)
 constexpr size_t kMinMeshes = 64, kMaxPasses = 2, kPassShare = 20, kPassMeshes = 16;
 // For a frame with ids (algo::cullMeshes), the first pass is drawn again by the frame, so it
-// draws fewer: the nearest 40th (city, 1920x1080 and 640x480: 1.07x over a 20th; culls as many).
+// draws fewer: the nearest 40th (as many culled as with a 20th, in less time).
 constexpr size_t kFramePassShare = 40;
 // ... and only when the meshes left to test hold at least this many triangles per tile of the
 // image (algo::meshCullingPaysForFrame checks the scene's count first): the first pass is a tile
 // pass over the whole image, and a mesh found hidden saves less than its triangles' whole cost
-// (the frame would have rejected many of them early anyway). At 1920x1080 (510 tiles), cities of
-// 14x14, 20x20 and 24x24 blocks (9,410 to 27,650 triangles; 12,552 of 19,202 culled at 20x20)
-// took 1.07x, 1.03x and 0.98x the time with a first pass; the 30x30 city (29,412 of 43,202
-// culled) 0.92x. With this threshold they take 0.99x, 0.99x, 0.98x and 0.92x; at 640x480 (80
-// tiles), 0.99x, 0.98x, 0.84x and 0.72x.
+// (the frame would have rejected many of them early anyway): below this, the first pass cost
+// more than it saved (see docs/benchmarks.md).
 constexpr uint64_t kFrameWaitingPerTile = 40;
 
 }  // namespace

@@ -10,11 +10,8 @@ namespace {
 
 // Threads pay off only with enough work: handing work to a pool thread costs about as much as
 // the kernel spends on ~4000 small binned triangles. A tile (cleared and resolved, or loaded,
-// drawn onto and stored again) justifies a worker of its own: with the pool's workers spinning
-// between jobs, two workers drew frames of 20-80 tiles 1.3-1.8x faster than one (cubes, layers,
-// a small city and random triangles at 640x480 and 320x240, frames with ids and depth only; the
-// city's first pass of mesh culling 1.10x), where a tile counted as 40 triangles had left them
-// on one. (Measured on builtin scenes with build/bench/hsr_ab_env, twenty-eighth session.)
+// drawn onto and stored again) justifies a worker of its own, so that frames of a few dozen
+// tiles use two workers rather than one (see docs/benchmarks.md).
 constexpr size_t kWorkPerThread = 4000;
 constexpr size_t kWorkPerTile = kWorkPerThread;
 
@@ -50,10 +47,12 @@ void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt
     state.bins.chunks[chunk].producer = uint32_t(currentPart());  // (for assignUnits)
     tiled::binChunk(state.bins, chunk, state.fe.chunks[chunk], &depth);
   };
+  const FrontEndOptions frontEnd{
+      .nearestFor = &depth, .deferBackFaces = deferBackFaces(opt), .deferClusters = deferClusters(), .only = only};
   if (vertices)
-    runSetUp(scene, cam, opt, *vertices, state.fe, bin, &depth, deferBackFaces(opt), deferClusters(), only);
+    runSetUp(scene, cam, opt, *vertices, state.fe, bin, frontEnd);
   else
-    runFrontEnd(scene, cam, opt, state.fe, bin, &depth, deferBackFaces(opt), deferClusters());
+    runFrontEnd(scene, cam, opt, state.fe, bin, frontEnd);
   state.bins.projected = (vertices ? *vertices : state.fe).projected.data();  // (for setting deferred triangles up)
   state.bins.camera = &cam;
   state.bins.sceneTriangles = scene.triangles.data();

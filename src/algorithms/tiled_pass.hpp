@@ -111,11 +111,9 @@ void assignUnits(TiledState& state, int workers, size_t units, TilesOf&& tilesOf
   }
   // The part that set up the fewest records (the last one on a tie): the units without records
   // are its own. They are pure memory traffic (streaming the background), the others mostly
-  // computation, and one core streams about as fast as two (1920x1080 with depth, face ids and
-  // colour: an empty frame 1.36 ms on one thread, 1.17 on two), so the background is best
-  // written while the other parts rasterize. Spread over all parts in consecutive runs instead,
-  // the cubes, whose few triangles one part sets up, took 1.01-1.09x the time (six runs, frame
-  // or depth only); the city the same (0.98-1.02x).
+  // computation, and one core streams about as fast as two, so the background is best written
+  // while the other parts rasterize. (Spreading them over all parts in consecutive runs was
+  // slower where one part sets up most triangles: see docs/benchmarks.md.)
   size_t lightest = parts - 1;
   for (size_t p = parts; p-- > 0;)
     if (state.partRecords[p] < state.partRecords[lightest]) lightest = p;

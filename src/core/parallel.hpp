@@ -29,8 +29,8 @@ inline int resolveThreads(int requested) {
 /// part with its own list: a thread takes the items of its own list first, in order, then helps
 /// with the others' (next). So a pass can give each thread the items whose data the same thread
 /// wrote in an earlier pass, still in its core's caches; on a machine whose cores do not share a
-/// last-level cache (the 2-core virtual machines this is measured on: a line written by the other
-/// core costs ~100-150 ns to load, one of its own ~20-30 ns) that decides much of a frame's time.
+/// last-level cache (a line written by the other core costs several times as much to load as
+/// one of its own; see docs/benchmarks.md) that decides much of a frame's time.
 /// Reused from job to job (no allocation once warm).
 class WorkQueue {
  public:
@@ -71,9 +71,9 @@ size_t currentPart();
 /// (the pool has hardware_concurrency - 1 of them, started once), the items shared out by a
 /// WorkQueue in runs of consecutive indices: thread by thread, the same runs job after job, so
 /// a thread's tasks mostly read what its own earlier tasks wrote for nearby indices (the front
-/// end's triangle chunks, the vertices its vertex chunks projected: sphere frames 0.96 of the
-/// time with two threads, against one shared counter). A call made while another is running
-/// (nested, or from another thread) runs serially on its caller.
+/// end's triangle chunks, the vertices its vertex chunks projected), which is faster than one
+/// shared counter. A call made while another is running (nested, or from another thread) runs
+/// serially on its caller.
 void runParallel(size_t n, int threads, const std::function<void(size_t)>& task);
 
 /// Calls fn(i) for i in [begin, end) on up to `threads` threads.

@@ -3,12 +3,10 @@
 // core/stream_fill.cpp). A frame buffer is written once per frame and not read back while it is
 // written, so the cache lines it covers whole need not be fetched before they are overwritten;
 // streamed stores skip that fetch. Lines covered in part take ordinary stores: a streamed line
-// that is not written whole goes out piecemeal, far slower. Measured on the project's 2-core VM
-// (the resolve's order of writes: 8-row bands of 64-pixel row pieces across 8 tiles, four
-// 1920x1080 buffers of 32-bit values, 2 threads): 1.6 ms median with line-aligned streams, 5.5-6.3
-// ms with ordinary stores, 15-18 ms streaming rows that start 16 bytes into a line (hence
-// FrameBuffer's cache-line alignment, include/hsr/frame.hpp). Streamed stores are weakly ordered:
-// a thread fences them (hwy::FlushStream) before another thread reads what it wrote.
+// that is not written whole goes out piecemeal, far slower — slower even than ordinary stores,
+// hence FrameBuffer's cache-line alignment (include/hsr/frame.hpp; figures in
+// docs/benchmarks.md). Streamed stores are weakly ordered: a thread fences them
+// (hwy::FlushStream) before another thread reads what it wrote.
 
 // Per-target include guard (Highway's pattern: this file is included once per target).
 #if defined(HSR_CORE_STREAM_INL_H_) == defined(HWY_TARGET_TOGGLE)

@@ -146,8 +146,8 @@ bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, c
   t.maxY = int16_t(boxY1);
   // A small box (at most kCoverageBox pixels each way; most triangles of a dense mesh): the
   // pixel centres the triangle covers, one bit each (SetupTriangle::coverage). None: it draws
-  // nothing, so it is dropped here rather than planed, binned and rasterized (189,912 of the
-  // 1,003,520 triangles of the sphere at 1920x1080).
+  // nothing, so it is dropped here rather than planed, binned and rasterized (in a dense mesh,
+  // many are).
   t.coverage = 0;
   if (boxX1 - boxX0 < kCoverageBox && boxY1 - boxY0 < kCoverageBox) {
     const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
@@ -247,7 +247,7 @@ bool boxInView(const Bounds3& box, const Camera& cam, const dmat4& M, BoxInView&
   // clipping plane by the margin; their least and greatest eye depth, widened for rounding (one
   // division a corner, not two: the reciprocal's rounding, ~1e-16 relative, is far within the
   // room deferCluster leaves, ~1e-12), and pixel positions. (With SIMD, four or eight corners at
-  // a time: sphere --depth-only --cull-back 0.984x the time, --depth-only 0.990x.)
+  // a time.)
   double extent[6];
   if (!boxCornersInView(box, M, cam, 1e-9 * magnitude, 1e-12 * wTerms, extent)) return false;
   out.zMin = extent[0], out.zMax = extent[1];
@@ -282,8 +282,8 @@ bool clusterInView(const TriangleCluster& cl, const ClusterView& view, const Cam
 
 // Pixels whose centres a triangle inside a box in view may cover: centres x + 1/2 within 1/256
 // of a pixel of [x0, x1] (snapping moves a vertex by 1/512; the rest is room for rounding, ~1e-12
-// relative). (Rather than a whole pixel of margin each side: sphere, a sixth fewer triangles set
-// up late.) False when no centre of the image is in it.
+// relative). (Rather than a whole pixel of margin each side: fewer triangles set up late.) False
+// when no centre of the image is in it.
 bool pixelBoxOf(const BoxInView& in, const Camera& cam, int16_t& minX, int16_t& minY, int16_t& maxX, int16_t& maxY) {
   constexpr double kRoom = 1.0 / 256;
   const double bx0 = std::max(0.0, std::ceil(in.x0 - 0.5 - kRoom));
@@ -385,185 +385,275 @@ uint64_t FrontEndOutput::memoryBytes() const {
 
 namespace {
 
-// Sets up the triangles [begin, end) into `out` in order, clipping where needed, with their
-// nearest bounds in `depth` (when given) in out.nearest.
-// Colour is shaded here, for the triangles that survive set-up, while the scene's data for
-// them is in cache (the resolve would read it back in pixel order, scattered). Triangles inside
-// the clip volume are set up in batches with SIMD (setupBatch); a clipped one flushes the batch
-// first, so the output stays in submission order.
-void setupRange(const Scene& scene, const Camera& cam, const RenderOptions& options, const TriangleShader& shade,
-                const FrontEndOutput& fe, const uint8_t* unclipped, const DepthSetup* depth, bool defer,
-                const ClusterView* clusters, size_t chunkBegin, size_t chunkEnd, const std::vector<TriangleRange>* only,
-                FrontEndChunk& out) {
-  out.triangles.clear();
-  out.nearest.clear();
-  out.deferred.clear();
-  out.clusters.clear();
-  FrontEndCounters& counters = out.counters;
-  const bool color = has(options.outputs, FrameOutputs::Color);
-  constexpr size_t kBatch = 64;
-  uint32_t batchVertex[3][kBatch], batchTriangle[kBatch], batchFace[kBatch];
-  double batchNearest[kBatch];
-  DeferredFace batchDeferred[kBatch];
-  size_t batched = 0;
-  bool cullFirst = false;  // see flush
-  auto keep = [&](const SetupTriangle& t, double nearest) {
-    if (out.triangles.size() + 48 < out.triangles.capacity())
-      __builtin_prefetch(out.triangles.data() + out.triangles.size() + 48, 1, 3);
-    out.triangles.push_back(t);
-    if (depth) out.nearest.push_back(nearest);
+// What the set-up of every chunk reads (runSetUp): the frame, its vertex pass, and what
+// runSetUp decided for all chunks.
+struct SetUpInputs {
+  const Scene& scene;
+  const Camera& cam;
+  const RenderOptions& options;
+  const TriangleShader& shade;
+  const FrontEndOutput& fe;     // the vertex pass (outcodes, projected vertices, meshes in view)
+  const uint8_t* unclipped;     // per mesh, 1 when none of its vertices is outside the clip volume
+  const DepthSetup* depth;      // the nearest bounds' depth setup (null: none)
+  bool defer;                   // back faces and clusters deferred (FrontEndOptions::deferBackFaces)
+  const ClusterView* clusters;  // clusters culled or deferred whole with this view (null: none)
+  bool color;                   // front faces shaded
+};
+
+// Sets up the triangles of one chunk [begin, end) into `out` in order, clipping where needed,
+// with their nearest bounds in `depth` (when given) in out.nearest. Colour is shaded here, for
+// the triangles that survive set-up, while the scene's data for them is in cache (the resolve
+// would read it back in pixel order, scattered). Triangles inside the clip volume are set up in
+// batches with SIMD (setupBatch); a clipped one flushes the batch first, so the output stays in
+// submission order.
+class ChunkSetUp {
+ public:
+  ChunkSetUp(const SetUpInputs& in, FrontEndChunk& out) : in_(in), out_(out), counters_(out.counters) {
+    out.triangles.clear();
+    out.nearest.clear();
+    out.deferred.clear();
+    out.clusters.clear();
+  }
+
+  // The chunk's triangles [chunkBegin, chunkEnd), or those of `only` in it.
+  void run(size_t chunkBegin, size_t chunkEnd, const std::vector<TriangleRange>* only) {
+    if (!only) {
+      segment(chunkBegin, chunkEnd);
+    } else {
+      for (auto r = std::lower_bound(only->begin(), only->end(), chunkBegin,
+                                     [](const TriangleRange& range, size_t t) { return range.end <= t; });
+           r != only->end() && r->first < chunkEnd; ++r)
+        segment(std::max<size_t>(chunkBegin, r->first), std::min<size_t>(chunkEnd, r->end));
+    }
+    if (batched_) flush();
+  }
+
+ private:
+  static constexpr size_t kBatch = 64;
+  static_assert(kChunkTriangles % kClusterTriangles == 0, "a cluster lies in one chunk");
+
+  // The run of triangles the loop in segment() is in: one mesh's, or those between meshes.
+  struct MeshRun {
+    size_t mesh;             // the first mesh not wholly before the run
+    size_t end;              // the run ends before this triangle
+    bool unclipped = false;  // a mesh whose vertices are all inside the clip volume
   };
-  auto flush = [&] {
-    const uint32_t* vertex[3] = {batchVertex[0], batchVertex[1], batchVertex[2]};
+
+  // The triangles [begin, end), in order, in runs of one mesh (or none). Those of a mesh whose
+  // vertices are all inside the clip volume go to the batch a cluster at a time, without their
+  // vertices' outcodes read one by one.
+  void segment(const size_t begin, const size_t end) {
+    const std::vector<MeshRange>& meshes = in_.scene.meshes;
+    // The first mesh not wholly before `begin` (meshes are in triangle order).
+    const auto firstMesh = std::partition_point(meshes.begin(), meshes.end(), [&](const MeshRange& m) {
+      return size_t(m.firstTriangle) + m.triangleCount <= begin;
+    });
+    MeshRun run{size_t(firstMesh - meshes.begin()), begin};
+    for (size_t ti = begin; ti < end; ++ti) {
+      if (ti >= run.end) nextRun(ti, end, run);
+      const Triangle& tri = in_.scene.triangles[ti];
+      if (in_.clusters && ti % kClusterTriangles == 0 && in_.fe.meshInView(tri.face) &&  // (a cluster is in one mesh)
+          takeCluster(ti, end)) {
+        ti += kClusterTriangles - 1;
+        continue;
+      }
+      if (run.unclipped) {  // (a mesh in view: none of its vertices is outside)
+        ti = batchRun(ti, std::min(run.end, end)) - 1;
+        continue;
+      }
+      setUpTriangle(ti, tri);
+    }
+  }
+
+  // The run triangle `ti` starts: its mesh's (ti is in it), or up to the next mesh.
+  void nextRun(size_t ti, size_t end, MeshRun& run) const {
+    const std::vector<MeshRange>& meshes = in_.scene.meshes;
+    while (run.mesh < meshes.size() && size_t(meshes[run.mesh].firstTriangle) + meshes[run.mesh].triangleCount <= ti)
+      ++run.mesh;
+    if (run.mesh < meshes.size() && meshes[run.mesh].firstTriangle <= ti) {
+      run.unclipped = in_.unclipped && in_.unclipped[run.mesh];
+      run.end = size_t(meshes[run.mesh].firstTriangle) + meshes[run.mesh].triangleCount;
+    } else {  // between meshes (or after the last)
+      run.unclipped = false;
+      run.end = run.mesh < meshes.size() ? meshes[run.mesh].firstTriangle : end;
+    }
+  }
+
+  // The cluster starting at triangle `ti` culled whole (with Cull::Back: each of its triangles a
+  // back face, counted as set-up would) or deferred whole; false when it is neither.
+  bool takeCluster(size_t ti, size_t end) {
+    const TriangleCluster& cluster = in_.scene.clusters[ti / kClusterTriangles];
+    if (ti + kClusterTriangles < end) {  // the next cluster (a culled or deferred one is skipped: no stream to follow)
+      __builtin_prefetch(&cluster + 1);
+      __builtin_prefetch(&in_.scene.triangles[ti + kClusterTriangles]);
+    }
+    if (in_.options.cull == Cull::Back) {
+      if (!cullCluster(cluster, *in_.clusters, in_.cam, in_.fe.pixelFromWorld)) return false;
+      counters_.culledBackface += kClusterTriangles;
+      return true;
+    }
+    if (!in_.defer) return false;
+    DeferredCluster dc;
+    if (!deferCluster(cluster, *in_.clusters, in_.cam, in_.fe.pixelFromWorld, *in_.depth, dc)) return false;
+    dc.cluster = uint32_t(ti / kClusterTriangles);
+    out_.clusters.push_back(dc);
+    return true;
+  }
+
+  // The triangles [ti, runEnd) of an unclipped mesh up to the next cluster, into the batch
+  // (flushed as it fills); returns where it stopped.
+  size_t batchRun(size_t ti, size_t runEnd) {
+    const size_t stop = std::min(runEnd, in_.clusters ? (ti / kClusterTriangles + 1) * kClusterTriangles : runEnd);
+    const Triangle* from = in_.scene.triangles.data();
+    const ProjectedVertex* projected = in_.fe.projected.data();
+    for (size_t t = ti; t < stop;) {
+      const size_t take = std::min(stop - t, kBatch - batched_);
+      for (size_t i = 0; i < take; ++i) {
+        const Triangle& tr = from[t + i];
+        for (int k = 0; k < 3; ++k) {
+          batchVertex_[k][batched_ + i] = tr.v[k];
+          __builtin_prefetch(projected + tr.v[k]);  // (setupBatch reads it a batch later)
+        }
+        batchTriangle_[batched_ + i] = uint32_t(t + i);
+        batchFace_[batched_ + i] = tr.face;
+      }
+      t += take;
+      batched_ += take;
+      if (batched_ == kBatch) flush();
+    }
+    return stop;
+  }
+
+  // One triangle of no unclipped mesh: culled whole when its mesh or all three vertices are
+  // outside, batched when all three are inside, else clipped.
+  void setUpTriangle(size_t ti, const Triangle& tri) {
+    const FrontEndOutput& fe = in_.fe;
+    if (!fe.meshInView(tri.face)) {
+      ++counters_.culledFrustum;
+      return;
+    }
+    const uint32_t c0 = fe.outcodes[tri.v[0]], c1 = fe.outcodes[tri.v[1]], c2 = fe.outcodes[tri.v[2]];
+    if (c0 & c1 & c2) {
+      ++counters_.culledFrustum;
+      return;
+    }
+    if ((c0 | c1 | c2) == 0) {
+      for (int k = 0; k < 3; ++k) {
+        batchVertex_[k][batched_] = tri.v[k];
+        __builtin_prefetch(fe.projected.data() + tri.v[k]);  // (setupBatch reads it a batch later)
+      }
+      batchTriangle_[batched_] = uint32_t(ti);
+      batchFace_[batched_] = tri.face;
+      if (++batched_ == kBatch) flush();
+      return;
+    }
+    if (batched_) flush();
+    setUpClipped(ti, tri, c0 | c1 | c2);
+  }
+
+  // A triangle crossing the clipping planes `planes`: clipped, and the pieces (the clipped
+  // polygon is convex: a fan) set up one by one, each keeping the triangle's and face's index.
+  void setUpClipped(size_t ti, const Triangle& tri, uint32_t planes) {
+    ++counters_.clipped;
+    for (int k = 0; k < 3; ++k) poly_[k] = transformVertex(in_.scene.positions[tri.v[k]], in_.fe.pixelFromWorld);
+    const int n = clipPolygon(poly_, 3, planes, in_.cam, scratch_);
+    for (int i = 1; i + 1 < n; ++i) {
+      HVertex piece[3] = {poly_[0], poly_[i], poly_[i + 1]};
+      if (setupTriangle(piece, uint32_t(ti), tri.face, in_.cam, in_.options.cull, counters_, piece_)) {
+        piece_.color = in_.color && piece_.frontFacing ? in_.shade(piece_.triangle) : Rgba8{};
+        keep(piece_, in_.depth ? nearestStored(piece_, *in_.depth) : 0.0);
+      }
+    }
+  }
+
+  void keep(const SetupTriangle& t, double nearest) {
+    SetupTriangles& list = out_.triangles;
+    if (list.size() + 48 < list.capacity()) __builtin_prefetch(list.data() + list.size() + 48, 1, 3);
+    list.push_back(t);
+    if (in_.depth) out_.nearest.push_back(nearest);
+  }
+
+  // The batch set up (setupBatch) straight into the chunk's list, its front faces shaded.
+  void flush() {
+    const uint32_t* vertex[3] = {batchVertex_[0], batchVertex_[1], batchVertex_[2]};
     size_t deferred = 0;
-    // Set up straight into the chunk's list (room for the whole batch first; resize writes
-    // nothing, UnwrittenAllocator), then cut to the triangles kept.
-    const size_t first = out.triangles.size();
-    out.triangles.resize(first + batched);
-    SetupTriangle* kept = out.triangles.data() + first;
-    const uint64_t culledBefore = counters.culledBackface;
-    const size_t n = setupBatch(fe.projected.data(), vertex, batchTriangle, batchFace, batched, cam, options.cull,
-                                counters, kept, depth, batchNearest, defer ? batchDeferred : nullptr, &deferred,
-                                cullFirst);
+    // Room for the whole batch first (resize writes nothing, UnwrittenAllocator), then cut to
+    // the triangles kept.
+    const size_t first = out_.triangles.size();
+    out_.triangles.resize(first + batched_);
+    SetupTriangle* kept = out_.triangles.data() + first;
+    const uint64_t culledBefore = counters_.culledBackface;
+    const size_t n = setupBatch(in_.fe.projected.data(), vertex, batchTriangle_, batchFace_, batched_, in_.cam,
+                                in_.options.cull, counters_, kept,
+                                {.depth = in_.depth,
+                                 .nearest = batchNearest_,
+                                 .deferred = in_.defer ? batchDeferred_ : nullptr,
+                                 .deferredCount = &deferred,
+                                 .cullFirst = cullFirst_});
     // With a cull, the facing test first for the next batch when at least a quarter of this one
-    // was culled (neighbouring triangles mostly face alike). On AVX2, --occlusion --cull back:
-    // city 1.04x, sphere 1.01x (whose set-up meets few back faces: its back-facing clusters
-    // are culled whole; the test first for every batch made it 0.98x).
-    cullFirst = (counters.culledBackface - culledBefore) * 4 >= batched;
-    out.triangles.resize(first + n);
+    // was culled: neighbouring triangles mostly face alike, and the test first pays only when
+    // many are culled.
+    cullFirst_ = (counters_.culledBackface - culledBefore) * 4 >= batched_;
+    out_.triangles.resize(first + n);
     // The next batch's lines, for writing (cold: last written a frame ago).
-    if (first + n + 2 * kBatch <= out.triangles.capacity()) prefetchForWriting(kept + n, kBatch);
-    // Front faces shaded (see triangleColor), many at once.
+    if (first + n + 2 * kBatch <= out_.triangles.capacity()) prefetchForWriting(kept + n, kBatch);
+    shadeFronts(kept, n);
+    if (in_.depth) out_.nearest.insert(out_.nearest.end(), batchNearest_, batchNearest_ + n);
+    out_.deferred.insert(out_.deferred.end(), batchDeferred_, batchDeferred_ + deferred);
+    batched_ = 0;
+  }
+
+  // The colours of set-up triangles kept[0, n): front faces shaded (see triangleColor), many at
+  // once; back faces none. (Inlined: part of flush, once a batch.)
+  [[gnu::always_inline]] void shadeFronts(SetupTriangle* kept, size_t n) const {
     uint32_t front[kBatch], at[kBatch];
     size_t fronts = 0;
     for (size_t i = 0; i < n; ++i) {
       kept[i].color = Rgba8{};
-      if (color && kept[i].frontFacing) front[fronts] = kept[i].triangle, at[fronts++] = uint32_t(i);
+      if (in_.color && kept[i].frontFacing) front[fronts] = kept[i].triangle, at[fronts++] = uint32_t(i);
     }
     Rgba8 colors[kBatch];
-    shade.shadeMany(front, fronts, colors);
+    in_.shade.shadeMany(front, fronts, colors);
     for (size_t j = 0; j < fronts; ++j) kept[at[j]].color = colors[j];
-    if (depth) out.nearest.insert(out.nearest.end(), batchNearest, batchNearest + n);
-    out.deferred.insert(out.deferred.end(), batchDeferred, batchDeferred + deferred);
-    batched = 0;
-  };
-  HVertex poly[3 + kPlanes], scratch[3 + kPlanes];
-  SetupTriangle st;
-  static_assert(kChunkTriangles % kClusterTriangles == 0, "a cluster lies in one chunk");
-  // The triangles [begin, end), in order, in runs of one mesh (or none). Those of a mesh whose
-  // vertices are all inside the clip volume (`unclipped`, per mesh) go to the batch a cluster at
-  // a time, without their vertices' outcodes read one by one (in one process: sphere
-  // --depth-only --cull-back 0.955x the time, its frame 0.965x, clutter 0.948x; random, city
-  // and cubes unchanged).
-  const std::vector<MeshRange>& meshes = scene.meshes;
-  auto segment = [&](const size_t begin, const size_t end) {
-    // The first mesh not wholly before `begin` (meshes are in triangle order).
-    size_t mesh = size_t(std::partition_point(meshes.begin(), meshes.end(), [&](const MeshRange& m) {
-                           return size_t(m.firstTriangle) + m.triangleCount <= begin;
-                         }) - meshes.begin());
-    size_t runEnd = begin;  // the current run: [.., runEnd), its triangles unclipped or not
-    bool unclippedRun = false;
-    for (size_t ti = begin; ti < end; ++ti) {
-      if (ti >= runEnd) {
-        while (mesh < meshes.size() && size_t(meshes[mesh].firstTriangle) + meshes[mesh].triangleCount <= ti) ++mesh;
-        if (mesh < meshes.size() && meshes[mesh].firstTriangle <= ti) {
-          unclippedRun = unclipped && unclipped[mesh];
-          runEnd = size_t(meshes[mesh].firstTriangle) + meshes[mesh].triangleCount;
-        } else {  // between meshes (or after the last)
-          unclippedRun = false;
-          runEnd = mesh < meshes.size() ? meshes[mesh].firstTriangle : end;
-        }
-      }
-      const Triangle& tri = scene.triangles[ti];
-      if (clusters && ti % kClusterTriangles == 0 && fe.meshInView(tri.face)) {  // (a cluster is in one mesh)
-        const TriangleCluster& cluster = scene.clusters[ti / kClusterTriangles];
-        if (ti + kClusterTriangles < end) {  // the next cluster (a culled or deferred one is skipped: no stream to follow)
-          __builtin_prefetch(&cluster + 1);
-          __builtin_prefetch(&scene.triangles[ti + kClusterTriangles]);
-        }
-        if (options.cull == Cull::Back) {  // each of its triangles a back face: culled, as set-up would
-          if (cullCluster(cluster, *clusters, cam, fe.pixelFromWorld)) {
-            counters.culledBackface += kClusterTriangles;
-            ti += kClusterTriangles - 1;
-            continue;
-          }
-        } else if (defer) {
-          DeferredCluster dc;
-          if (deferCluster(cluster, *clusters, cam, fe.pixelFromWorld, *depth, dc)) {
-            dc.cluster = uint32_t(ti / kClusterTriangles);
-            out.clusters.push_back(dc);
-            ti += kClusterTriangles - 1;
-            continue;
-          }
-        }
-      }
-      if (unclippedRun) {  // (a mesh in view: none of its vertices is outside)
-        // The run's triangles up to the next cluster, batch by batch.
-        const size_t stop = std::min(runEnd, std::min(end, clusters ? (ti / kClusterTriangles + 1) * kClusterTriangles
-                                                                     : end));
-        const Triangle* from = scene.triangles.data();
-        const ProjectedVertex* projected = fe.projected.data();
-        for (size_t t = ti; t < stop;) {
-          const size_t take = std::min(stop - t, kBatch - batched);
-          for (size_t i = 0; i < take; ++i) {
-            const Triangle& tr = from[t + i];
-            for (int k = 0; k < 3; ++k) {
-              batchVertex[k][batched + i] = tr.v[k];
-              __builtin_prefetch(projected + tr.v[k]);  // (setupBatch reads it a batch later)
-            }
-            batchTriangle[batched + i] = uint32_t(t + i);
-            batchFace[batched + i] = tr.face;
-          }
-          t += take;
-          batched += take;
-          if (batched == kBatch) flush();
-        }
-        ti = stop - 1;
-        continue;
-      }
-      if (!fe.meshInView(tri.face)) {
-        ++counters.culledFrustum;
-        continue;
-      }
-      const uint32_t c0 = fe.outcodes[tri.v[0]], c1 = fe.outcodes[tri.v[1]], c2 = fe.outcodes[tri.v[2]];
-      if (c0 & c1 & c2) {
-        ++counters.culledFrustum;
-        continue;
-      }
-      if ((c0 | c1 | c2) == 0) {
-        for (int k = 0; k < 3; ++k) {
-          batchVertex[k][batched] = tri.v[k];
-          __builtin_prefetch(fe.projected.data() + tri.v[k]);  // (setupBatch reads it a batch later)
-        }
-        batchTriangle[batched] = uint32_t(ti);
-        batchFace[batched] = tri.face;
-        if (++batched == kBatch) flush();
-        continue;
-      }
-      if (batched) flush();
-      ++counters.clipped;
-      for (int k = 0; k < 3; ++k) poly[k] = transformVertex(scene.positions[tri.v[k]], fe.pixelFromWorld);
-      const int n = clipPolygon(poly, 3, c0 | c1 | c2, cam, scratch);
-      // The clipped polygon is convex: fan it. Every piece keeps the triangle's and face's index.
-      for (int i = 1; i + 1 < n; ++i) {
-        HVertex piece[3] = {poly[0], poly[i], poly[i + 1]};
-        if (setupTriangle(piece, uint32_t(ti), tri.face, cam, options.cull, counters, st)) {
-          st.color = color && st.frontFacing ? shade(st.triangle) : Rgba8{};
-          keep(st, depth ? nearestStored(st, *depth) : 0.0);
-        }
-      }
-    }
-  };
-  // The chunk's triangles, or those of `only` in it.
-  if (!only) {
-    segment(chunkBegin, chunkEnd);
-  } else {
-    for (auto r = std::lower_bound(only->begin(), only->end(), chunkBegin,
-                                   [](const TriangleRange& range, size_t t) { return range.end <= t; });
-         r != only->end() && r->first < chunkEnd; ++r)
-      segment(std::max<size_t>(chunkBegin, r->first), std::min<size_t>(chunkEnd, r->end));
   }
-  if (batched) flush();
+
+  const SetUpInputs& in_;
+  FrontEndChunk& out_;
+  FrontEndCounters& counters_;
+  // The batch: triangle i has vertices batchVertex_[0..2][i], scene index batchTriangle_[i].
+  uint32_t batchVertex_[3][kBatch], batchTriangle_[kBatch], batchFace_[kBatch];
+  size_t batched_ = 0;
+  bool cullFirst_ = false;  // see flush
+  double batchNearest_[kBatch];
+  DeferredFace batchDeferred_[kBatch];
+  HVertex poly_[3 + kPlanes], scratch_[3 + kPlanes];  // a clipped triangle's polygon
+  SetupTriangle piece_;                                // and the set-up of one piece of it
+};
+
+// FrontEndOutput::meshUnclipped: of the meshes set-up meets (those of `only`, or all), those
+// whose vertices all have outcode 0 in the vertex pass.
+void findUnclippedMeshes(const Scene& scene, const FrontEndOutput& vertices, const std::vector<TriangleRange>* only,
+                         std::vector<uint8_t>& unclipped) {
+  const size_t meshCount = scene.meshes.size();
+  unclipped.assign(meshCount, 0);
+  auto test = [&](size_t m) {
+    const MeshRange& mesh = scene.meshes[m];
+    if (mesh.vertexCount == 0 || (m < vertices.meshCulled.size() && vertices.meshCulled[m])) return;
+    const uint8_t* code = vertices.outcodes.data() + mesh.firstVertex;
+    uint8_t any = 0;
+    for (uint32_t v = 0; v < mesh.vertexCount; ++v) any |= code[v];
+    unclipped[m] = any == 0;
+  };
+  if (!only) {
+    for (size_t m = 0; m < meshCount; ++m) test(m);
+    return;
+  }
+  auto r = only->begin();
+  for (size_t m = 0; m < meshCount && r != only->end(); ++m) {
+    const size_t first = scene.meshes[m].firstTriangle, last = first + scene.meshes[m].triangleCount;
+    while (r != only->end() && r->end <= first) ++r;
+    if (r != only->end() && r->first < last) test(m);
+  }
 }
 
 }  // namespace
@@ -609,8 +699,7 @@ void runVertexPass(const Scene& scene, const Camera& cam, const RenderOptions& o
 
   // The vertex pass's chunks, then the mesh tests' runs, as items of one parallel loop — on one
   // thread when there are no more vertices and mesh corners than one item holds: handing a few
-  // microseconds of work to a second thread costs more than it saves (the cubes at 64x48 took
-  // 1.09x the time with 2 threads, their one vertex chunk and one run of mesh tests apart).
+  // microseconds of work to a second thread costs more than it saves.
   const size_t vertexChunks = vertices ? (nv + kChunkTriangles - 1) / kChunkTriangles : 0;
   constexpr size_t kMeshesPerItem = 512;
   const size_t meshItems = (meshCount + kMeshesPerItem - 1) / kMeshesPerItem;
@@ -637,58 +726,38 @@ void runVertexPass(const Scene& scene, const Camera& cam, const RenderOptions& o
 }
 
 void runSetUp(const Scene& scene, const Camera& cam, const RenderOptions& options, const FrontEndOutput& vertices,
-              FrontEndOutput& out, const ChunkConsumer& consumer, const DepthSetup* nearestFor, bool deferBackFaces,
-              bool deferClusters, const std::vector<TriangleRange>* only) {
+              FrontEndOutput& out, const ChunkConsumer& consumer, const FrontEndOptions& frontEnd) {
   static_cast<FrontEndCounters&>(out) = FrontEndCounters{};
   const int threads = resolveThreads(options.threads);
   // Triangles in fixed chunks, each into its own list (read in chunk order, they are the
   // submission order), each handed to the consumer by the worker that set it up.
   const size_t nt = scene.triangles.size();
   const TriangleShader shade(scene, cam, options.shading);
-  const bool clusters = ((deferBackFaces && nearestFor) || options.cull == Cull::Back) && deferClusters &&
+  const bool defer = frontEnd.deferBackFaces && frontEnd.nearestFor;
+  const bool clusters = (defer || options.cull == Cull::Back) && frontEnd.deferClusters &&
                         scene.clusters.size() == (nt + kClusterTriangles - 1) / kClusterTriangles;
   const ClusterView view = clusters ? clusterView(cam) : ClusterView{};
-  // The meshes set-up meets (those of `only`, or all) whose vertices all have outcode 0.
-  const size_t meshCount = scene.meshes.size();
-  out.meshUnclipped.assign(meshCount, 0);
-  auto testUnclipped = [&](size_t m) {
-    const MeshRange& mesh = scene.meshes[m];
-    if (mesh.vertexCount == 0 || (m < vertices.meshCulled.size() && vertices.meshCulled[m])) return;
-    const uint8_t* code = vertices.outcodes.data() + mesh.firstVertex;
-    uint8_t any = 0;
-    for (uint32_t v = 0; v < mesh.vertexCount; ++v) any |= code[v];
-    out.meshUnclipped[m] = any == 0;
-  };
-  if (!only) {
-    for (size_t m = 0; m < meshCount; ++m) testUnclipped(m);
-  } else {
-    auto r = only->begin();
-    for (size_t m = 0; m < meshCount && r != only->end(); ++m) {
-      const size_t first = scene.meshes[m].firstTriangle, last = first + scene.meshes[m].triangleCount;
-      while (r != only->end() && r->end <= first) ++r;
-      if (r != only->end() && r->first < last) testUnclipped(m);
-    }
-  }
+  findUnclippedMeshes(scene, vertices, frontEnd.only, out.meshUnclipped);
   out.chunkTriangles = chunkTrianglesFor(nt);
   const size_t per = out.chunkTriangles;
   out.chunkCount = (nt + per - 1) / per;
   if (out.chunks.size() < out.chunkCount) out.chunks.resize(out.chunkCount);
+  const SetUpInputs in{scene, cam, options, shade, vertices, out.meshUnclipped.data(), frontEnd.nearestFor, defer,
+                       view.enabled ? &view : nullptr, has(options.outputs, FrameOutputs::Color)};
   parallelFor(0, out.chunkCount, threads, [&](size_t c) {
     FrontEndChunk& chunk = out.chunks[c];
     chunk.counters = FrontEndCounters{};
     chunk.firstTriangle = uint32_t(c * per);
-    setupRange(scene, cam, options, shade, vertices, out.meshUnclipped.data(), nearestFor,
-               deferBackFaces && nearestFor, view.enabled ? &view : nullptr, c * per, std::min(nt, (c + 1) * per),
-               only, chunk);
+    ChunkSetUp(in, chunk).run(c * per, std::min(nt, (c + 1) * per), frontEnd.only);
     if (consumer) consumer(c);
   });
   for (size_t c = 0; c < out.chunkCount; ++c) out.add(out.chunks[c].counters);
 }
 
 void runFrontEnd(const Scene& scene, const Camera& cam, const RenderOptions& options, FrontEndOutput& out,
-                 const ChunkConsumer& consumer, const DepthSetup* nearestFor, bool deferBackFaces, bool deferClusters) {
+                 const ChunkConsumer& consumer, const FrontEndOptions& frontEnd) {
   runVertexPass(scene, cam, options, out);
-  runSetUp(scene, cam, options, out, out, consumer, nearestFor, deferBackFaces, deferClusters);
+  runSetUp(scene, cam, options, out, out, consumer, frontEnd);
 }
 
 }  // namespace hsr

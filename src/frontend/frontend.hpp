@@ -124,17 +124,12 @@ inline constexpr size_t kChunkTriangles = 1 << 12;
 /// The fewest scene triangles per chunk (chunkTrianglesFor), a multiple of kClusterTriangles.
 inline constexpr size_t kMinChunkTriangles = 256;
 /// Scene triangles per chunk for a scene of `triangles`: kChunkTriangles, or fewer (down to
-/// kMinChunkTriangles) so that a scene of under 16K triangles still has about 4 chunks — a chunk
-/// is set up and binned by one thread, and 10,000 triangles in 3 chunks of 4096 kept one of two
-/// threads waiting a third of the time. Not more: every tile merges the lists of every chunk
-/// binned to it (orderTile), a cost per chunk and tile. On the Intel Xeon of the thirty-ninth
-/// session, 4 chunks against 16 (one process alternating them, B/A): random 10,000
-/// --occlusion --cull back 0.961 (1 thread 0.974), its frame 0.991, at 640x480 0.945; random
-/// 5,000 0.952; city at 640x480 0.978, its occlusion buffer 1.004; 8 chunks gave 0.972 and 32
-/// gave 1.026. (The Zen 3 of the thirty-second session preferred 16 to 10: 1.03-1.06x.) A
-/// function of the scene only, never of the thread count: binning culls within a chunk, so the
-/// statistics would depend on it. (Machines with more cores get no more front-end threads than
-/// chunks: under 16K triangles, 4.)
+/// kMinChunkTriangles) so that a scene of under 16K triangles still has about 4 chunks. A chunk
+/// is set up and binned by one thread, so too few chunks leave threads idle; too many cost time,
+/// because every tile merges the lists of every chunk binned to it (orderTile). Four was the
+/// best count measured (see docs/benchmarks.md). A function of the scene only, never of the
+/// thread count: binning culls within a chunk, so the statistics would depend on it. (So a
+/// scene under 16K triangles never uses more than 4 front-end threads.)
 inline size_t chunkTrianglesFor(size_t triangles) {
   constexpr size_t kChunks = 4;
   static_assert(kMinChunkTriangles % kClusterTriangles == 0 && kChunkTriangles % kClusterTriangles == 0);
@@ -142,7 +137,7 @@ inline size_t chunkTrianglesFor(size_t triangles) {
   return std::clamp(per, kMinChunkTriangles, kChunkTriangles);
 }
 
-/// A back face runFrontEnd(deferBackFaces = true) did not write a SetupTriangle for: what the
+/// A back face runFrontEnd(.deferBackFaces = true) did not write a SetupTriangle for: what the
 /// tiled rasterizer needs to decide, from its tile's stored depths, whether it can show, and to
 /// set it up again (setupBatch, same bits) if so (raster/tiled.hpp: deferred back faces).
 /// 40 bytes instead of the record's 96.
@@ -153,7 +148,7 @@ struct DeferredFace {
   double nearest;                  // nearestStored() of its set-up triangle
 };
 
-/// A cluster of scene triangles (Scene::clusters) that runFrontEnd(deferBackFaces = true) did
+/// A cluster of scene triangles (Scene::clusters) that runFrontEnd(.deferBackFaces = true) did
 /// not set up: every triangle of it faces away from the eye by a margin, so it is likely hidden
 /// behind the front of its mesh; the tiled rasterizer sets it up only in the tiles where it may
 /// still show (raster/tiled.hpp: deferred clusters). 24 bytes for kClusterTriangles triangles.
@@ -169,7 +164,7 @@ inline constexpr int kDeferTile = 64;
 
 /// An allocator whose default construction writes nothing (for an aggregate, trivially copyable
 /// type: the storage already holds such an object, whose values come later): a list that grows by
-/// resize() and is then written in place, without a pass of zeros first (setupRange).
+/// resize() and is then written in place, without a pass of zeros first (set-up's chunk lists).
 template <class T>
 struct UnwrittenAllocator : std::allocator<T> {
   template <class U>
@@ -201,13 +196,13 @@ inline void prefetchForWriting(const SetupTriangle* first, size_t count) {
 struct FrontEndChunk {
   uint32_t firstTriangle = 0;  // the scene index of its first triangle: chunk c holds [c k, c k + k), k = chunkTriangles
   SetupTriangles triangles;
-  /// With runFrontEnd's deferBackFaces: the deferred back faces (not in `triangles`), in
+  /// With FrontEndOptions::deferBackFaces: the deferred back faces (not in `triangles`), in
   /// submission order (the records of those set up again are the tiled rasterizer's: Bins::late).
   std::vector<DeferredFace> deferred;
-  /// With runFrontEnd's deferBackFaces: the deferred clusters, in submission order (their
+  /// With FrontEndOptions::deferBackFaces: the deferred clusters, in submission order (their
   /// triangles are in neither `triangles` nor `deferred`).
   std::vector<DeferredCluster> clusters;
-  /// With runFrontEnd's `nearestFor` only, one per triangle: a stored value of that depth setup
+  /// With FrontEndOptions::nearestFor only, one per triangle: a stored value of that depth setup
   /// that none of the triangle's fragments is nearer than (nearestStored() in
   /// raster/fragment_depth.hpp, bit for bit), for occlusion culling.
   std::vector<double> nearest;
@@ -293,41 +288,66 @@ inline constexpr size_t kSetupBatch = 8;
 /// (frontend/setup_batch.cpp): triangle i has vertices projected[vertex[0..2][i]], scene index
 /// triIndex[i] and face face[i]. Writes the survivors to out[0, n), in order, and returns n;
 /// the SetupTriangles (colour aside) and counters are bit for bit those of setupTriangle().
-/// With `depth`, also nearest[0, n): nearestStored(out[i], *depth), bit for bit.
-/// With `deferred` (and `depth`), the back faces whose pixel box lies in one kDeferTile square
-/// go to deferred[0, *deferredCount) as DeferredFaces instead (in order; not counted in n).
-/// With `cullFirst` (and a cull), the facing test runs over all of them first and only the
-/// triangles it keeps are set up: faster when many are culled, slower when few are; the output
-/// is the same.
+/// What else setupBatch computes, and how (see SetupBatchOptions' fields).
+struct SetupBatchOptions {
+  /// With `depth`, also nearest[0, n): nearestStored(out[i], *depth), bit for bit.
+  const DepthSetup* depth = nullptr;
+  double* nearest = nullptr;
+  /// With `deferred` (and `depth`), the back faces whose pixel box lies in one kDeferTile
+  /// square go to deferred[0, *deferredCount) as DeferredFaces instead (in order; not counted
+  /// in the result).
+  DeferredFace* deferred = nullptr;
+  size_t* deferredCount = nullptr;
+  /// With a cull: the facing test runs over all the triangles first and only those it keeps
+  /// are set up. Faster when many are culled, slower when few are; the output is the same.
+  bool cullFirst = false;
+};
 size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
                   const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
-                  SetupTriangle* out, const DepthSetup* depth = nullptr, double* nearest = nullptr,
-                  DeferredFace* deferred = nullptr, size_t* deferredCount = nullptr, bool cullFirst = false);
-
-/// Runs the front end over all scene triangles, in order, on up to options.threads threads; the
-/// work is split into fixed chunks, so the output never depends on the thread count.
-/// `out` is reused across frames. `consumer`, when given, is called once per chunk (see
-/// ChunkConsumer), before runFrontEnd returns. With `nearestFor`, every chunk's `nearest` holds
-/// the triangles' nearest bounds in that depth setup. With `deferBackFaces` too, the back faces
-/// setupBatch can defer are in the chunks' `deferred` lists, and the clusters that face away
-/// from the eye (deferCluster; unless `deferClusters` is false) in their `clusters` lists, not
-/// in `triangles`. With options.cull == Cull::Back (and `deferClusters`), clusters cullCluster
-/// accepts are culled whole.
-void runFrontEnd(const Scene& scene, const Camera& camera, const RenderOptions& options, FrontEndOutput& out,
-                 const ChunkConsumer& consumer = {}, const DepthSetup* nearestFor = nullptr,
-                 bool deferBackFaces = false, bool deferClusters = true);
+                  SetupTriangle* out, const SetupBatchOptions& options);
+/// The same with only a depth setup and its nearest bounds (or neither).
+inline size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
+                         const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
+                         SetupTriangle* out, const DepthSetup* depth = nullptr, double* nearest = nullptr) {
+  return setupBatch(projected, vertex, triIndex, face, count, cam, cull, counters, out,
+                    SetupBatchOptions{.depth = depth, .nearest = nearest});
+}
 
 /// Scene triangles [first, end).
 struct TriangleRange {
   uint32_t first, end;
 };
 
+/// What runFrontEnd and runSetUp produce besides the set-up triangles, and which triangles they
+/// set up. The defaults: set-up triangles only, for every scene triangle.
+struct FrontEndOptions {
+  /// Every chunk's `nearest` holds the triangles' nearest bounds in this depth setup.
+  const DepthSetup* nearestFor = nullptr;
+  /// With `nearestFor`: the back faces setupBatch can defer go to the chunks' `deferred` lists,
+  /// and the clusters that face away from the eye (deferCluster) to their `clusters` lists,
+  /// instead of `triangles`.
+  bool deferBackFaces = false;
+  /// Whether whole clusters are deferred (with deferBackFaces) or, with RenderOptions::cull ==
+  /// Cull::Back, culled whole when cullCluster accepts them.
+  bool deferClusters = true;
+  /// Only these triangles are set up (sorted, disjoint ranges, each a union of whole meshes, so
+  /// no cluster is split): the chunks stay the same, the others are left out as if culled,
+  /// uncounted.
+  const std::vector<TriangleRange>* only = nullptr;
+};
+
+/// Runs the front end over all scene triangles, in order, on up to options.threads threads; the
+/// work is split into fixed chunks, so the output never depends on the thread count.
+/// `out` is reused across frames. `consumer`, when given, is called once per chunk (see
+/// ChunkConsumer), before runFrontEnd returns. `frontEnd`: see FrontEndOptions, e.g.
+/// runFrontEnd(scene, cam, opt, fe, consumer, {.nearestFor = &depth, .deferBackFaces = true}).
+void runFrontEnd(const Scene& scene, const Camera& camera, const RenderOptions& options, FrontEndOutput& out,
+                 const ChunkConsumer& consumer = {}, const FrontEndOptions& frontEnd = {});
+
 /// runFrontEnd in two steps: the vertex pass (every vertex transformed, projected where inside
 /// the clip volume; meshes outside it culled whole), into `out`; then set-up (and the consumer)
 /// reading `vertices`, the output of a vertex pass with the same scene, camera and options,
-/// into `out`'s chunks and counters (`out` may be `vertices`). With `only` (sorted, disjoint
-/// ranges, each a union of whole meshes, so no cluster is split), only those triangles are set
-/// up: the chunks stay the same, the others are left out as if culled, uncounted.
+/// into `out`'s chunks and counters (`out` may be `vertices`), as FrontEndOptions asks.
 /// `meshConsumer`, when given, is called with runs [first, last) of meshes whose view test
 /// (FrontEndOutput::meshCulled) is done, on the worker that did it, while the vertex pass goes on.
 /// With `vertices` false, only the meshes are tested: the caller transforms the vertices it
@@ -336,8 +356,7 @@ using MeshConsumer = std::function<void(size_t first, size_t last)>;
 void runVertexPass(const Scene& scene, const Camera& camera, const RenderOptions& options, FrontEndOutput& out,
                    const MeshConsumer& meshConsumer = {}, bool vertices = true);
 void runSetUp(const Scene& scene, const Camera& camera, const RenderOptions& options, const FrontEndOutput& vertices,
-              FrontEndOutput& out, const ChunkConsumer& consumer = {}, const DepthSetup* nearestFor = nullptr,
-              bool deferBackFaces = false, bool deferClusters = true, const std::vector<TriangleRange>* only = nullptr);
+              FrontEndOutput& out, const ChunkConsumer& consumer = {}, const FrontEndOptions& frontEnd = {});
 
 /// What deciding about clusters needs from a camera, once per frame (deferCluster).
 struct ClusterView {
@@ -355,7 +374,7 @@ ClusterView clusterView(const Camera& cam);
 bool cullCluster(const TriangleCluster& cluster, const ClusterView& view, const Camera& cam,
                  const dmat4& pixelFromWorld);
 
-/// Whether runFrontEnd(deferBackFaces = true) defers cluster `cluster` of a scene (see
+/// Whether runFrontEnd(.deferBackFaces = true) defers cluster `cluster` of a scene (see
 /// DeferredCluster), and if so its box and nearest bound in `out` (out.cluster is left to the
 /// caller). Every triangle of a deferred cluster lies inside the clip volume (none is clipped)
 /// and draws only inside the box, and no fragment it draws in `depth` is nearer than

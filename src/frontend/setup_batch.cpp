@@ -2,7 +2,7 @@
 // same arithmetic as setupTriangle(const ProjectedVertex*, ...) in frontend.cpp, lane by lane —
 // every value of the set-up is an IEEE double operation in the same order (or an exact integer
 // in double: fixed-point coordinates are below 2^24, their products below 2^49), so a batch
-// produces bit for bit the SetupTriangles the scalar function does (tests/frontend_test.cpp).
+// produces bit for bit the SetupTriangles the scalar function does (tests/raster_test.cpp).
 // Used by runFrontEnd() for the triangles inside the clip volume; clipped ones stay scalar.
 
 #undef HWY_TARGET_INCLUDE
@@ -95,8 +95,7 @@ HWY_INLINE V NearestStored(const DepthSetup& depth, const PlaneV& N, const Plane
   };
   // (When every lane is affine, as with a perspective camera and z, reversed or inv, Q is 1:
   // q is 1 at every corner ((0 x + 0 y) + 1), its bounds 1 -+ 8 ulp, positive and finite, so Q
-  // is not evaluated (sphere --depth-only 1.010x on AVX2), and the quotients are not needed:
-  // two vector divisions less.)
+  // is not evaluated, and the quotients are not needed: two vector divisions less.)
   const bool allConstant = hn::AllTrue(d, constant);
   const V pErr = error(P);
   V pMin = hn::Set(d, inf), pMax = hn::Set(d, -inf), qMin = pMin, qMax = pMax;
@@ -172,9 +171,8 @@ HWY_INLINE void LoadVertices(const ProjectedVertex* projected, const uint32_t* c
   for (int k = 0; k < 3; ++k) {
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
     // Each vertex loaded whole (4 doubles, one 32-byte load) and each group of 4 transposed,
-    // rather than 4 gathers: AVX-512 (8 lanes, two groups) sphere frames 0.95-0.97 of the time
-    // on Zen 5; AVX2 (4 lanes, one group) sphere --depth-only frames 0.94 of the time on an
-    // AMD EPYC without AVX-512.
+    // rather than 4 gathers, which are slower on both AVX-512 (8 lanes, two groups) and AVX2
+    // (4 lanes, one group); see docs/benchmarks.md.
     static_assert(kSetupBatch == 8);
     using H4 = hn::CappedTag<double, 4>;  // one vertex's 4 fields
     const H4 h;
@@ -239,334 +237,504 @@ HWY_INLINE V Facing(const V* sx, const V* sy, Cull cull, size_t lanes, FrontEndC
   return area;
 }
 
-size_t SetupLanes(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
-                  const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
-                  SetupTriangle* out, const DepthSetup* depth, double* nearest, DeferredFace* deferred,
-                  size_t* deferredCount) {
+// The triangles of a batch: triangle i has vertices projected[vertex[0..2][i]], scene index
+// triIndex[i] and face face[i].
+struct BatchInput {
+  const ProjectedVertex* projected;
+  const uint32_t* const* vertex;
+  const uint32_t* triIndex;
+  const uint32_t* face;
+  size_t count;
+};
+
+// Where SetupLanes writes, and how much it has written: the survivors to out[0, written) (and
+// their bounds to nearest[0, written), when not null), the deferred back faces to
+// deferred[0, deferredWritten) (when not null).
+struct BatchSink {
+  SetupTriangle* out;
+  double* nearest;
+  DeferredFace* deferred;
+  size_t written = 0, deferredWritten = 0;
+};
+
+// One vector of triangles in set-up, filled in step by step (the steps below, in order): lane j
+// holds triangle first + j of the batch, for j < lanes (a last, partial vector repeats its last
+// triangle in the other lanes).
+struct LaneGroup {
+  size_t first, lanes;
+  // LoadGroup: the vertices' fields, snapped positions (1/256 pixel), twice the signed area,
+  // front facing, and live (neither degenerate nor culled, and j < lanes).
+  V sx[3], sy[3], num[3], den[3], X[3], Y[3];
+  V area;
+  M front, live;
+  // PixelBoxOf: the snapped vertices' extremes (1/256 pixel); the pixel box in the image
+  // (inclusive) and its size; no pixel centre in the box; off screen; at most kCoverageBox
+  // pixels each way.
+  V minX, maxX, minY, maxY;
+  V x0, x1, y0, y1, width, height;
+  M noBox, offScreen, small;
+  // CoverageOf: SetupTriangle::coverage (0 unless small).
+  V coverage;
+  // DepthPlanesOf: SetupTriangle::depthNum and depthDen; the snapped corners in pixels.
+  PlaneV depthNum, depthDen;
+  V px[3], py[3];
+};
+
+// The lanes of the fields a record is written from (StoreLanes), one row of kSetupBatch lanes
+// per field.
+enum LaneField { kLaneX = 0, kLaneY = 3, kLaneMinX = 6, kLaneMaxX, kLaneMinY, kLaneMaxY, kLaneDepthNum,
+                 kLaneDepthDen = kLaneDepthNum + 3, kLaneNearest = kLaneDepthDen + 3, kLaneFront, kLaneCoverage,
+                 kLaneFields };
+struct LaneArrays {
+  HWY_ALIGN double v[kLaneFields][kSetupBatch];
+};
+
+// Step 1: the vertices of triangles [first, first + lanes) loaded, snapped and classified (Facing).
+HWY_INLINE void LoadGroup(const BatchInput& in, Cull cull, FrontEndCounters& counters, LaneGroup& g) {
+  LoadVertices(in.projected, in.vertex, g.first, g.lanes, g.sx, g.sy, g.num, g.den);
+  g.area = Facing(g.sx, g.sy, cull, g.lanes, counters, g.X, g.Y, g.front, g.live);
+}
+
+// Step 2: the vertex order that makes the edge functions positive inside: 1 and 2 swapped in
+// the lanes whose area is negative (front facing).
+HWY_INLINE void OrderVertices(LaneGroup& g) {
+  auto order = [&](V* a) {
+    const V a1 = hn::IfThenElse(g.front, a[2], a[1]), a2 = hn::IfThenElse(g.front, a[1], a[2]);
+    a[1] = a1;
+    a[2] = a2;
+  };
+  order(g.sx), order(g.sy), order(g.X), order(g.Y), order(g.num), order(g.den);
+}
+
+// Step 3: the pixel box, x in [ceil((min - 1/2) / 1), floor((max - 1/2))] in pixels, in the image.
+HWY_INLINE void PixelBoxOf(const Camera& cam, LaneGroup& g) {
+  const D d;
+  const V zero = hn::Zero(d);
+  const V one = hn::Set(d, double(kSubpixelOne)), half = hn::Set(d, double(kSubpixelOne / 2));
+  const V* X = g.X;
+  const V* Y = g.Y;
+  g.minX = hn::Min(hn::Min(X[0], X[1]), X[2]), g.maxX = hn::Max(hn::Max(X[0], X[1]), X[2]);
+  g.minY = hn::Min(hn::Min(Y[0], Y[1]), Y[2]), g.maxY = hn::Max(hn::Max(Y[0], Y[1]), Y[2]);
+  const V inv256 = hn::Set(d, 1.0 / double(kSubpixelOne));
+  g.x0 = hn::Max(zero, hn::Ceil(hn::Mul(hn::Sub(g.minX, half), inv256)));
+  g.x1 = hn::Min(hn::Set(d, double(cam.width - 1)), hn::Floor(hn::Mul(hn::Sub(g.maxX, half), inv256)));
+  g.y0 = hn::Max(zero, hn::Ceil(hn::Mul(hn::Sub(g.minY, half), inv256)));
+  g.y1 = hn::Min(hn::Set(d, double(cam.height - 1)), hn::Floor(hn::Mul(hn::Sub(g.maxY, half), inv256)));
+  g.noBox = hn::Or(hn::Gt(g.x0, g.x1), hn::Gt(g.y0, g.y1));
+  g.offScreen = hn::Or(hn::Or(hn::Lt(g.maxX, zero), hn::Lt(g.maxY, zero)),
+                       hn::Or(hn::Gt(g.minX, hn::Mul(hn::Set(d, double(cam.width)), one)),
+                              hn::Gt(g.minY, hn::Mul(hn::Set(d, double(cam.height)), one))));
+  g.width = hn::Add(hn::Sub(g.x1, g.x0), hn::Set(d, 1.0));
+  g.height = hn::Add(hn::Sub(g.y1, g.y0), hn::Set(d, 1.0));
+  const V boxLimit = hn::Set(d, double(kCoverageBox));
+  g.small = hn::AndNot(g.noBox, hn::And(hn::Le(g.width, boxLimit), hn::Le(g.height, boxLimit)));
+}
+
+// The three edge functions of a vector of triangles at the centre of their boxes' first pixel,
+// their steps per pixel in x (A) and y (B), and the top-left rule's bias (raster/edge.hpp).
+struct EdgesV {
+  V row[3], stepA[3], stepB[3], bias[3];
+};
+
+// Step 4a: edge set-up. Every value is an integer below 2^53 (A = -dy, B = dx per 1/256 pixel,
+// stepped by whole pixels), exact in any order.
+HWY_INLINE EdgesV EdgesOf(const LaneGroup& g) {
+  const D d;
+  const V zero = hn::Zero(d);
+  const V one = hn::Set(d, double(kSubpixelOne)), half = hn::Set(d, double(kSubpixelOne / 2));
+  EdgesV e;
+  V edx[3], edy[3];
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3;
+    edx[i] = hn::Sub(g.X[j], g.X[i]);
+    edy[i] = hn::Sub(g.Y[j], g.Y[i]);
+    const M topLeft = hn::Or(hn::Lt(edy[i], zero), hn::And(hn::Eq(edy[i], zero), hn::Gt(edx[i], zero)));
+    e.bias[i] = hn::IfThenElseZero(hn::Not(topLeft), hn::Set(d, 1.0));
+  }
+  const V px = hn::Add(hn::Mul(g.x0, one), half), py = hn::Add(hn::Mul(g.y0, one), half);
+  for (int i = 0; i < 3; ++i) {
+    e.row[i] = hn::Sub(hn::Mul(edx[i], hn::Sub(py, g.Y[i])), hn::Mul(edy[i], hn::Sub(px, g.X[i])));
+    e.stepA[i] = hn::Mul(hn::Neg(edy[i]), one);
+    e.stepB[i] = hn::Mul(edx[i], one);
+  }
+  return e;
+}
+
+// Step 4b: for the small boxes (at most kCoverageBox centres each way), the centres the
+// triangle covers, one bit each (SetupTriangle::coverage), centre (ox, oy) of the box counting
+// 2^(4 oy + ox); 0 in the other lanes.
+HWY_INLINE void CoverageOf(LaneGroup& g) {
+  const D d;
+  g.coverage = hn::Zero(d);
+  if (hn::AllFalse(d, g.small)) return;
+  EdgesV e = EdgesOf(g);
+  // Only as many rows and columns as the vector's largest small box has. A lane's centres beyond
+  // its own box are outside its triangle (right of or below every vertex: some edge function is
+  // negative there), unless the image's edge cut the box short: only then are they masked, by
+  // rowIn and the column test (the masks cost time in every lane, so they are left out when no
+  // box was cut).
+  const V half = hn::Set(d, double(kSubpixelOne / 2)), inv256 = hn::Set(d, 1.0 / double(kSubpixelOne));
+  const V bw = g.width, bh = g.height;
+  const int rows = int(hn::GetLane(hn::MaxOfLanes(d, hn::IfThenElseZero(g.small, bh))));
+  const int cols = int(hn::GetLane(hn::MaxOfLanes(d, hn::IfThenElseZero(g.small, bw))));
+  const V rightmost = hn::Floor(hn::Mul(hn::Sub(g.maxX, half), inv256));
+  const V lowest = hn::Floor(hn::Mul(hn::Sub(g.maxY, half), inv256));
+  const bool cut = !hn::AllFalse(d, hn::And(g.small, hn::Or(hn::Lt(g.x1, rightmost), hn::Lt(g.y1, lowest))));
+  V coverage = hn::Zero(d);
+  auto cover = [&](auto masked) HWY_ATTR {
+    for (int oy = 0; oy < rows; ++oy) {
+      V edge[3] = {e.row[0], e.row[1], e.row[2]};
+      const M rowIn = hn::Lt(hn::Set(d, double(oy)), bh);
+      for (int ox = 0; ox < cols; ++ox) {
+        M inside = hn::Ge(edge[0], e.bias[0]);
+        if constexpr (decltype(masked)::value)
+          inside = hn::And(inside, hn::And(rowIn, hn::Lt(hn::Set(d, double(ox)), bw)));
+        edge[0] = hn::Add(edge[0], e.stepA[0]);
+        for (int i = 1; i < 3; ++i) {
+          inside = hn::And(inside, hn::Ge(edge[i], e.bias[i]));
+          edge[i] = hn::Add(edge[i], e.stepA[i]);
+        }
+        coverage = hn::Add(coverage, hn::IfThenElseZero(inside, hn::Set(d, double(1 << (oy * kCoverageBox + ox)))));
+      }
+      for (int i = 0; i < 3; ++i) e.row[i] = hn::Add(e.row[i], e.stepB[i]);
+    }
+  };
+  if (cut) cover(std::true_type());
+  else cover(std::false_type());
+  g.coverage = hn::IfThenElseZero(g.small, coverage);
+}
+
+// Step 5: the depth planes, through the unsnapped positions unless that triangle is (nearly)
+// degenerate, then through the snapped corners (as setupTriangle decides).
+HWY_INLINE void DepthPlanesOf(LaneGroup& g) {
+  const D d;
+  const V* sx = g.sx;
+  const V* sy = g.sy;
+  const V exactArea = hn::Sub(hn::Mul(hn::Sub(sx[1], sx[0]), hn::Sub(sy[2], sy[0])),
+                              hn::Mul(hn::Sub(sy[1], sy[0]), hn::Sub(sx[2], sx[0])));
+  // (Divisions by powers of two are multiplications by their exact reciprocals: same bits.)
+  const M useExact = hn::Gt(exactArea, hn::Mul(hn::Mul(hn::Set(d, 0.5), hn::Abs(g.area)),
+                                               hn::Set(d, 1.0 / double(kSubpixelOne * kSubpixelOne))));
+  const V inv256 = hn::Set(d, 1.0 / double(kSubpixelOne));
+  for (int k = 0; k < 3; ++k) {
+    g.px[k] = hn::Mul(g.X[k], inv256);
+    g.py[k] = hn::Mul(g.Y[k], inv256);
+  }
+  V x[3], y[3];
+  for (int k = 0; k < 3; ++k) {
+    x[k] = hn::IfThenElse(useExact, sx[k], g.px[k]);
+    y[k] = hn::IfThenElse(useExact, sy[k], g.py[k]);
+  }
+  const V x1 = hn::Sub(x[1], x[0]), y1 = hn::Sub(y[1], y[0]), x2 = hn::Sub(x[2], x[0]), y2 = hn::Sub(y[2], y[0]);
+  const V inv = hn::Div(hn::Set(d, 1.0), hn::Sub(hn::Mul(x1, y2), hn::Mul(x2, y1)));
+  auto through = [&](const V* val, PlaneV& p) {
+    const V v1 = hn::Sub(val[1], val[0]), v2 = hn::Sub(val[2], val[0]);
+    p.a = hn::Mul(hn::Sub(hn::Mul(v1, y2), hn::Mul(v2, y1)), inv);
+    p.b = hn::Mul(hn::Sub(hn::Mul(x1, v2), hn::Mul(x2, v1)), inv);
+    p.c = hn::Sub(hn::Sub(val[0], hn::Mul(p.a, x[0])), hn::Mul(p.b, y[0]));
+  };
+  through(g.num, g.depthNum);
+  through(g.den, g.depthDen);
+}
+
+// Step 6: the reasons a live lane draws nothing, counted as setupTriangle counts them (the
+// first that applies; degenerate and culled by Facing), without a branch per lane. Returns the
+// survivors.
+HWY_INLINE M CountDropped(const LaneGroup& g, FrontEndCounters& counters) {
+  const D d;
+  const M empty = hn::AndNot(hn::Gt(g.coverage, hn::Zero(d)), g.small);
+  counters.culledFrustum += hn::CountTrue(d, hn::And(g.live, hn::And(g.noBox, g.offScreen)));
+  counters.empty += hn::CountTrue(d, hn::And(g.live, empty));  // (empty excludes noBox)
+  return hn::AndNot(hn::Or(g.noBox, empty), g.live);
+}
+
+// Step 7: the fields records are written from, stored lane by lane (one store per field: a
+// braced list of the vectors would be copied whole first). The AVX2 and AVX-512 records are
+// built from the vectors, so they need the box and nearest bound only (for DeferredFace and
+// `nearest`).
+HWY_INLINE void StoreLanes(const LaneGroup& g, V nearest, LaneArrays& lane) {
+  const D d;
+  hn::Store(g.x0, d, lane.v[kLaneMinX]), hn::Store(g.x1, d, lane.v[kLaneMaxX]);
+  hn::Store(g.y0, d, lane.v[kLaneMinY]), hn::Store(g.y1, d, lane.v[kLaneMaxY]);
+  hn::Store(nearest, d, lane.v[kLaneNearest]);
+#if !(HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2)
+  for (int k = 0; k < 3; ++k) {
+    hn::Store(g.X[k], d, lane.v[kLaneX + k]);
+    hn::Store(g.Y[k], d, lane.v[kLaneY + k]);
+  }
+  hn::Store(g.depthNum.a, d, lane.v[kLaneDepthNum]), hn::Store(g.depthNum.b, d, lane.v[kLaneDepthNum + 1]);
+  hn::Store(g.depthNum.c, d, lane.v[kLaneDepthNum + 2]);
+  hn::Store(g.depthDen.a, d, lane.v[kLaneDepthDen]), hn::Store(g.depthDen.b, d, lane.v[kLaneDepthDen + 1]);
+  hn::Store(g.depthDen.c, d, lane.v[kLaneDepthDen + 2]);
+  hn::Store(hn::VecFromMask(d, g.front), d, lane.v[kLaneFront]);
+  hn::Store(g.coverage, d, lane.v[kLaneCoverage]);
+#endif
+}
+
+// Step 8: with a list of deferred faces, the back faces among the survivors whose box lies in
+// one kDeferTile square go there (in order); returns which lanes they were.
+HWY_INLINE M WriteDeferred(const LaneGroup& g, M survivors, const LaneArrays& lane, const BatchInput& in,
+                           BatchSink& sink) {
+  const D d;
+  M defer = hn::FirstN(d, 0);
+  if (sink.deferred) {
+    const V tile = hn::Set(d, 1.0 / kDeferTile);
+    auto sameTile = [&](V a, V b) { return hn::Eq(hn::Floor(hn::Mul(a, tile)), hn::Floor(hn::Mul(b, tile))); };
+    defer = hn::AndNot(g.front, hn::And(survivors, hn::And(sameTile(g.x0, g.x1), sameTile(g.y0, g.y1))));
+  }
+  uint8_t deferBits[8] = {};
+  hn::StoreMaskBits(d, defer, deferBits);
+  for (unsigned bits = deferBits[0]; bits; bits &= bits - 1) {
+    const size_t j = hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
+    DeferredFace& f = sink.deferred[sink.deferredWritten++];
+    for (int k = 0; k < 3; ++k) f.v[k] = in.vertex[k][g.first + j];
+    f.triangle = in.triIndex[g.first + j];
+    f.face = in.face[g.first + j];
+    f.minX = int16_t(lane.v[kLaneMinX][j]);
+    f.maxX = int16_t(lane.v[kLaneMaxX][j]);
+    f.minY = int16_t(lane.v[kLaneMinY][j]);
+    f.maxY = int16_t(lane.v[kLaneMaxY][j]);
+    f.nearest = lane.v[kLaneNearest][j];
+  }
+  return defer;
+}
+
+// The record's 12 eight-byte words, as the AVX2 and AVX-512 paths below build them.
+static_assert(offsetof(SetupTriangle, minX) == 24 && offsetof(SetupTriangle, depthNum) == 32 &&
+              offsetof(SetupTriangle, depthDen) == 56 && offsetof(SetupTriangle, triangle) == 80 &&
+              offsetof(SetupTriangle, face) == 84 && offsetof(SetupTriangle, frontFacing) == 88 &&
+              offsetof(SetupTriangle, coverage) == 90 && offsetof(SetupTriangle, color) == 92,
+              "the words below are the record's layout");
+
+// Step 9: a SetupTriangle for each lane of `survivorBits` (its colour is the caller's), in
+// order, at sink.out[sink.written], and its bound at sink.nearest[sink.written]. Three ways to
+// the same bytes, by instruction set.
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
+// 8 lanes (AVX-512): each record's 12 eight-byte words built a vector per word (lane j:
+// triangle j's), the vectors transposed, and each survivor's record stored with two stores
+// (instead of 24 fields read from the lane arrays and written one by one per record).
+HWY_INLINE void WriteRecords(const LaneGroup& g, unsigned survivorBits, const LaneArrays& lane, const BatchInput& in,
+                             BatchSink& sink) {
   const D d;
   const size_t N = hn::Lanes(d);
-  size_t written = 0, deferredWritten = 0;
-  if (deferredCount) *deferredCount = 0;
-  if (!depth) deferred = nullptr;  // (a deferred face needs its nearest bound)
-  for (size_t first = 0; first < count; first += N) {
-    const size_t lanes = std::min(N, count - first);
-    // Each vertex's fields (ProjectedVertex: sx, sy, num, den; 4 x 8 bytes), and snap
-    // (snapCoordinate: an integer below 2^23, the same in double as in int64).
-    V sx[3], sy[3], X[3], Y[3], num[3], den[3];
-    LoadVertices(projected, vertex, first, lanes, sx, sy, num, den);
-    M front, live;
-    const V area = Facing(sx, sy, cull, lanes, counters, X, Y, front, live);
-    // A vector of culled (or degenerate) triangles only: counted, and nothing more to do (city
-    // --occlusion --cull back 1.02x on AVX2).
-    if (hn::AllFalse(d, live)) continue;
-    const V zero = hn::Zero(d);
-    // Vertex order making the edge functions positive inside: swap 1 and 2 when area < 0.
-    auto order = [&](V* a) {
-      const V a1 = hn::IfThenElse(front, a[2], a[1]), a2 = hn::IfThenElse(front, a[1], a[2]);
-      a[1] = a1;
-      a[2] = a2;
-    };
-    order(sx), order(sy), order(X), order(Y), order(num), order(den);
-    // Pixel box: x in [ceil((min - 1/2) / 1), floor((max - 1/2))] in pixels, in the image.
-    const V one = hn::Set(d, double(kSubpixelOne)), half = hn::Set(d, double(kSubpixelOne / 2));
-    const V minX = hn::Min(hn::Min(X[0], X[1]), X[2]), maxX = hn::Max(hn::Max(X[0], X[1]), X[2]);
-    const V minY = hn::Min(hn::Min(Y[0], Y[1]), Y[2]), maxY = hn::Max(hn::Max(Y[0], Y[1]), Y[2]);
-    const V inv256 = hn::Set(d, 1.0 / double(kSubpixelOne));
-    const V bx0 = hn::Max(zero, hn::Ceil(hn::Mul(hn::Sub(minX, half), inv256)));
-    const V bx1 = hn::Min(hn::Set(d, double(cam.width - 1)), hn::Floor(hn::Mul(hn::Sub(maxX, half), inv256)));
-    const V by0 = hn::Max(zero, hn::Ceil(hn::Mul(hn::Sub(minY, half), inv256)));
-    const V by1 = hn::Min(hn::Set(d, double(cam.height - 1)), hn::Floor(hn::Mul(hn::Sub(maxY, half), inv256)));
-    const M noBox = hn::Or(hn::Gt(bx0, bx1), hn::Gt(by0, by1));
-    const M offScreen = hn::Or(hn::Or(hn::Lt(maxX, zero), hn::Lt(maxY, zero)),
-                               hn::Or(hn::Gt(minX, hn::Mul(hn::Set(d, double(cam.width)), one)),
-                                      hn::Gt(minY, hn::Mul(hn::Set(d, double(cam.height)), one))));
-    // Small boxes (at most kCoverageBox centres each way): the centres the triangle covers, one
-    // bit each (SetupTriangle::coverage), centre (ox, oy) of the box counting 2^(4 oy + ox).
-    const V bw = hn::Add(hn::Sub(bx1, bx0), hn::Set(d, 1.0)), bh = hn::Add(hn::Sub(by1, by0), hn::Set(d, 1.0));
-    const V boxLimit = hn::Set(d, double(kCoverageBox));
-    const M small = hn::AndNot(noBox, hn::And(hn::Le(bw, boxLimit), hn::Le(bh, boxLimit)));
-    V coverage = zero;
-    if (!hn::AllFalse(d, small)) {
-      V edx[3], edy[3], ebias[3];
-      for (int i = 0; i < 3; ++i) {
-        const int j = (i + 1) % 3;
-        edx[i] = hn::Sub(X[j], X[i]);
-        edy[i] = hn::Sub(Y[j], Y[i]);
-        const M topLeft = hn::Or(hn::Lt(edy[i], zero), hn::And(hn::Eq(edy[i], zero), hn::Gt(edx[i], zero)));
-        ebias[i] = hn::IfThenElseZero(hn::Not(topLeft), hn::Set(d, 1.0));
-      }
-      // Each edge function at the corner centre, then stepped by whole pixels (A = -dy, B = dx
-      // per 1/256 pixel): every value is an integer below 2^53, exact in any order.
-      const V px = hn::Add(hn::Mul(bx0, one), half), py = hn::Add(hn::Mul(by0, one), half);
-      V row[3], stepA[3], stepB[3];
-      for (int i = 0; i < 3; ++i) {
-        row[i] = hn::Sub(hn::Mul(edx[i], hn::Sub(py, Y[i])), hn::Mul(edy[i], hn::Sub(px, X[i])));
-        stepA[i] = hn::Mul(hn::Neg(edy[i]), one);
-        stepB[i] = hn::Mul(edx[i], one);
-      }
-      // Only as many rows and columns as the batch's largest small box has. A lane's centres
-      // beyond its own box are outside its triangle (right of or below every vertex: some edge
-      // function is negative there), unless the image's edge cut the box short: only then are
-      // they masked, by rowIn and the column test (sphere --depth-only 1.013x on AVX2).
-      const int rows = int(hn::GetLane(hn::MaxOfLanes(d, hn::IfThenElseZero(small, bh))));
-      const int cols = int(hn::GetLane(hn::MaxOfLanes(d, hn::IfThenElseZero(small, bw))));
-      const V rightmost = hn::Floor(hn::Mul(hn::Sub(maxX, half), inv256));
-      const V lowest = hn::Floor(hn::Mul(hn::Sub(maxY, half), inv256));
-      const bool cut = !hn::AllFalse(d, hn::And(small, hn::Or(hn::Lt(bx1, rightmost), hn::Lt(by1, lowest))));
-      auto cover = [&](auto masked) HWY_ATTR {
-        for (int oy = 0; oy < rows; ++oy) {
-          V e[3] = {row[0], row[1], row[2]};
-          const M rowIn = hn::Lt(hn::Set(d, double(oy)), bh);
-          for (int ox = 0; ox < cols; ++ox) {
-            M inside = hn::Ge(e[0], ebias[0]);
-            if constexpr (decltype(masked)::value)
-              inside = hn::And(inside, hn::And(rowIn, hn::Lt(hn::Set(d, double(ox)), bw)));
-            e[0] = hn::Add(e[0], stepA[0]);
-            for (int i = 1; i < 3; ++i) {
-              inside = hn::And(inside, hn::Ge(e[i], ebias[i]));
-              e[i] = hn::Add(e[i], stepA[i]);
-            }
-            coverage = hn::Add(coverage, hn::IfThenElseZero(inside, hn::Set(d, double(1 << (oy * kCoverageBox + ox)))));
-          }
-          for (int i = 0; i < 3; ++i) row[i] = hn::Add(row[i], stepB[i]);
-        }
-      };
-      if (cut) cover(std::true_type());
-      else cover(std::false_type());
-      coverage = hn::IfThenElseZero(small, coverage);
+  const hn::Repartition<int64_t, D> di;
+  const hn::Repartition<uint64_t, D> du;
+  const hn::Rebind<uint32_t, D> du32;
+  auto toInt = [&](V v) { return hn::BitCast(du, hn::ConvertTo(di, v)); };
+  auto low32 = [&](V v) { return hn::And(toInt(v), hn::Set(du, 0xFFFFFFFFull)); };
+  auto low16 = [&](V v) { return hn::And(toInt(v), hn::Set(du, 0xFFFFull)); };
+  const auto q0 = hn::Or(low32(g.X[0]), hn::ShiftLeft<32>(toInt(g.X[1])));
+  const auto q1 = hn::Or(low32(g.X[2]), hn::ShiftLeft<32>(toInt(g.Y[0])));
+  const auto q2 = hn::Or(low32(g.Y[1]), hn::ShiftLeft<32>(toInt(g.Y[2])));
+  const auto q3 = hn::Or(hn::Or(low16(g.x0), hn::ShiftLeft<16>(low16(g.y0))),
+                         hn::Or(hn::ShiftLeft<32>(low16(g.x1)), hn::ShiftLeft<48>(toInt(g.y1))));
+  HWY_ALIGN uint32_t tri8[kSetupBatch], face8[kSetupBatch];  // (the lists end with the batch)
+  hn::Vec<decltype(du32)> tris, faces;
+  if (g.lanes == N) {
+    tris = hn::LoadU(du32, in.triIndex + g.first), faces = hn::LoadU(du32, in.face + g.first);
+  } else {
+    for (size_t j = 0; j < N; ++j) {
+      tri8[j] = in.triIndex[g.first + std::min(j, g.lanes - 1)];
+      face8[j] = in.face[g.first + std::min(j, g.lanes - 1)];
     }
-    const M covers = hn::Gt(coverage, zero);
-    const M empty = hn::AndNot(covers, small);
-    // Depth planes through the unsnapped positions unless that triangle is (nearly) degenerate.
-    const V exactArea = hn::Sub(hn::Mul(hn::Sub(sx[1], sx[0]), hn::Sub(sy[2], sy[0])),
-                                hn::Mul(hn::Sub(sy[1], sy[0]), hn::Sub(sx[2], sx[0])));
-    // (Divisions by powers of two are multiplications by their exact reciprocals: same bits.)
-    const M useExact = hn::Gt(exactArea, hn::Mul(hn::Mul(hn::Set(d, 0.5), hn::Abs(area)),
-                                                 hn::Set(d, 1.0 / double(kSubpixelOne * kSubpixelOne))));
-    V px[3], py[3];  // the snapped corners in pixels
+    tris = hn::Load(du32, tri8), faces = hn::Load(du32, face8);
+  }
+  const auto ids = hn::Or(hn::PromoteTo(du, tris), hn::ShiftLeft<32>(hn::PromoteTo(du, faces)));
+  // frontFacing (byte 88: 1 or 0), a zero byte, coverage (bytes 90-91), colour (92-95: set by the caller)
+  const auto flags = hn::Or(hn::IfThenElseZero(hn::RebindMask(du, g.front), hn::Set(du, 1)),
+                            hn::ShiftLeft<16>(toInt(g.coverage)));
+  __m512i r[8] = {q0.raw, q1.raw, q2.raw, q3.raw, hn::BitCast(du, g.depthNum.a).raw, hn::BitCast(du, g.depthNum.b).raw,
+                  hn::BitCast(du, g.depthNum.c).raw, hn::BitCast(du, g.depthDen.a).raw};
+  // 8x8 transpose of 64-bit words: r[j] becomes words 0-7 of triangle j's record.
+  __m512i t[8];
+  for (int i = 0; i < 8; i += 2) {
+    t[i] = _mm512_unpacklo_epi64(r[i], r[i + 1]);
+    t[i + 1] = _mm512_unpackhi_epi64(r[i], r[i + 1]);
+  }
+  for (int i = 0; i < 8; i += 4)
+    for (int k = 0; k < 2; ++k) {
+      r[i + k] = _mm512_shuffle_i64x2(t[i + k], t[i + k + 2], 0x88);
+      r[i + k + 2] = _mm512_shuffle_i64x2(t[i + k], t[i + k + 2], 0xDD);
+    }
+  __m512i row[8];
+  for (int k = 0; k < 4; ++k) {
+    row[k] = _mm512_shuffle_i64x2(r[k], r[k + 4], 0x88);
+    row[k + 4] = _mm512_shuffle_i64x2(r[k], r[k + 4], 0xDD);
+  }
+  // Words 8-11 (db, dc, ids, flags): a 4x8 transpose into halves.
+  const __m512i w8 = hn::BitCast(du, g.depthDen.b).raw, w9 = hn::BitCast(du, g.depthDen.c).raw;
+  const __m512i a0 = _mm512_unpacklo_epi64(w8, w9), a1 = _mm512_unpackhi_epi64(w8, w9);
+  const __m512i b0 = _mm512_unpacklo_epi64(ids.raw, flags.raw), b1 = _mm512_unpackhi_epi64(ids.raw, flags.raw);
+  const __m512i lo = _mm512_setr_epi64(0, 1, 8, 9, 2, 3, 10, 11), hi = _mm512_setr_epi64(4, 5, 12, 13, 6, 7, 14, 15);
+  __m256i tail[8];
+  const __m512i even02 = _mm512_permutex2var_epi64(a0, lo, b0), even46 = _mm512_permutex2var_epi64(a0, hi, b0);
+  const __m512i odd13 = _mm512_permutex2var_epi64(a1, lo, b1), odd57 = _mm512_permutex2var_epi64(a1, hi, b1);
+  tail[0] = _mm512_castsi512_si256(even02), tail[2] = _mm512_extracti64x4_epi64(even02, 1);
+  tail[4] = _mm512_castsi512_si256(even46), tail[6] = _mm512_extracti64x4_epi64(even46, 1);
+  tail[1] = _mm512_castsi512_si256(odd13), tail[3] = _mm512_extracti64x4_epi64(odd13, 1);
+  tail[5] = _mm512_castsi512_si256(odd57), tail[7] = _mm512_extracti64x4_epi64(odd57, 1);
+  for (unsigned bits = survivorBits; bits; bits &= bits - 1) {
+    const size_t j = hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
+    if (sink.nearest) sink.nearest[sink.written] = lane.v[kLaneNearest][j];
+    char* at = reinterpret_cast<char*>(sink.out + sink.written++);
+    _mm512_storeu_si512(at, row[j]);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(at + 64), tail[j]);
+  }
+}
+#elif HWY_ARCH_X86 && HWY_TARGET == HWY_AVX2
+// 4 lanes (AVX2): the same 12 words per record as above, built as three 4x4 transposes of
+// 64-bit words (words 0-3, 4-7, 8-11), each survivor's record stored with three 32-byte
+// stores (instead of 24 fields read from the lane arrays and written one by one).
+HWY_INLINE void WriteRecords(const LaneGroup& g, unsigned survivorBits, const LaneArrays& lane, const BatchInput& in,
+                             BatchSink& sink) {
+  const D d;
+  const size_t N = hn::Lanes(d);
+  // (Every value converted is an integer well inside int32: exact. Lane j of a 64-bit word
+  // pair (a, b) holds a in its low half.)
+  auto pairs = [](__m128i a, __m128i b) {
+    return _mm256_set_m128i(_mm_unpackhi_epi32(a, b), _mm_unpacklo_epi32(a, b));
+  };
+  auto int32 = [](V v) { return _mm256_cvtpd_epi32(v.raw); };
+  const __m128i x0 = int32(g.X[0]), x1 = int32(g.X[1]), x2 = int32(g.X[2]);
+  const __m128i y0 = int32(g.Y[0]), y1 = int32(g.Y[1]), y2 = int32(g.Y[2]);
+  // The box: (minX, minY) and (maxX, maxY) as 16-bit pairs (0 <= each < 2^15 for a survivor).
+  const __m128i minXY = _mm_unpacklo_epi16(_mm_packs_epi32(int32(g.x0), int32(g.x0)),
+                                           _mm_packs_epi32(int32(g.y0), int32(g.y0)));
+  const __m128i maxXY = _mm_unpacklo_epi16(_mm_packs_epi32(int32(g.x1), int32(g.x1)),
+                                           _mm_packs_epi32(int32(g.y1), int32(g.y1)));
+  __m128i tris, faces;
+  if (g.lanes == N) {
+    tris = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in.triIndex + g.first));
+    faces = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in.face + g.first));
+  } else {  // (the lists end with the batch)
+    alignas(16) uint32_t tri4[4], face4[4];
+    for (size_t j = 0; j < 4; ++j) {
+      tri4[j] = in.triIndex[g.first + std::min(j, g.lanes - 1)];
+      face4[j] = in.face[g.first + std::min(j, g.lanes - 1)];
+    }
+    tris = _mm_load_si128(reinterpret_cast<const __m128i*>(tri4));
+    faces = _mm_load_si128(reinterpret_cast<const __m128i*>(face4));
+  }
+  // frontFacing (byte 88: 1 or 0), a zero byte, coverage (bytes 90-91), colour (92-95: set
+  // by the caller).
+  const __m128i flags32 = _mm_or_si128(int32(hn::IfThenElseZero(g.front, hn::Set(d, 1.0))),
+                                       _mm_slli_epi32(int32(g.coverage), 16));
+  auto asInt = [](V v) { return _mm256_castpd_si256(v.raw); };
+  const __m256i word[12] = {pairs(x0, x1),       pairs(x2, y0),       pairs(y1, y2),
+                            pairs(minXY, maxXY), asInt(g.depthNum.a), asInt(g.depthNum.b),
+                            asInt(g.depthNum.c), asInt(g.depthDen.a), asInt(g.depthDen.b),
+                            asInt(g.depthDen.c), pairs(tris, faces),  _mm256_cvtepu32_epi64(flags32)};
+  // Three 4x4 transposes: row[k][j] holds words 4 k to 4 k + 3 of lane j's record.
+  __m256i row[3][4];
+  for (int k = 0; k < 3; ++k) {
+    const __m256i* q = word + 4 * k;
+    const __m256i t0 = _mm256_unpacklo_epi64(q[0], q[1]), t1 = _mm256_unpackhi_epi64(q[0], q[1]);
+    const __m256i t2 = _mm256_unpacklo_epi64(q[2], q[3]), t3 = _mm256_unpackhi_epi64(q[2], q[3]);
+    row[k][0] = _mm256_permute2x128_si256(t0, t2, 0x20);
+    row[k][1] = _mm256_permute2x128_si256(t1, t3, 0x20);
+    row[k][2] = _mm256_permute2x128_si256(t0, t2, 0x31);
+    row[k][3] = _mm256_permute2x128_si256(t1, t3, 0x31);
+  }
+  for (unsigned bits = survivorBits; bits; bits &= bits - 1) {
+    const size_t j = hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
+    if (sink.nearest) sink.nearest[sink.written] = lane.v[kLaneNearest][j];
+    __m256i* at = reinterpret_cast<__m256i*>(sink.out + sink.written++);
+    for (int k = 0; k < 3; ++k) _mm256_storeu_si256(at + k, row[k][j]);
+  }
+}
+#else
+// Other instruction sets: each survivor's fields read from the lane arrays.
+HWY_INLINE void WriteRecords(const LaneGroup& g, unsigned survivorBits, const LaneArrays& lane, const BatchInput& in,
+                             BatchSink& sink) {
+  for (unsigned bits = survivorBits; bits; bits &= bits - 1) {
+    const size_t j = hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
+    if (sink.nearest) sink.nearest[sink.written] = lane.v[kLaneNearest][j];
+    SetupTriangle& t = sink.out[sink.written++];
     for (int k = 0; k < 3; ++k) {
-      px[k] = hn::Mul(X[k], inv256);
-      py[k] = hn::Mul(Y[k], inv256);
+      t.x[k] = int32_t(lane.v[kLaneX + k][j]);
+      t.y[k] = int32_t(lane.v[kLaneY + k][j]);
     }
-    V x[3], y[3];
-    for (int k = 0; k < 3; ++k) {
-      x[k] = hn::IfThenElse(useExact, sx[k], px[k]);
-      y[k] = hn::IfThenElse(useExact, sy[k], py[k]);
-    }
-    const V x1 = hn::Sub(x[1], x[0]), y1 = hn::Sub(y[1], y[0]), x2 = hn::Sub(x[2], x[0]), y2 = hn::Sub(y[2], y[0]);
-    const V inv = hn::Div(hn::Set(d, 1.0), hn::Sub(hn::Mul(x1, y2), hn::Mul(x2, y1)));
-    auto through = [&](const V* val, V& a, V& b, V& c) {
-      const V v1 = hn::Sub(val[1], val[0]), v2 = hn::Sub(val[2], val[0]);
-      a = hn::Mul(hn::Sub(hn::Mul(v1, y2), hn::Mul(v2, y1)), inv);
-      b = hn::Mul(hn::Sub(hn::Mul(x1, v2), hn::Mul(x2, v1)), inv);
-      c = hn::Sub(hn::Sub(val[0], hn::Mul(a, x[0])), hn::Mul(b, y[0]));
-    };
-    V na, nb, nc, da, db, dc;
-    through(num, na, nb, nc);
-    through(den, da, db, dc);
+    t.minX = int16_t(lane.v[kLaneMinX][j]);
+    t.maxX = int16_t(lane.v[kLaneMaxX][j]);
+    t.minY = int16_t(lane.v[kLaneMinY][j]);
+    t.maxY = int16_t(lane.v[kLaneMaxY][j]);
+    t.depthNum = Plane{lane.v[kLaneDepthNum][j], lane.v[kLaneDepthNum + 1][j], lane.v[kLaneDepthNum + 2][j]};
+    t.depthDen = Plane{lane.v[kLaneDepthDen][j], lane.v[kLaneDepthDen + 1][j], lane.v[kLaneDepthDen + 2][j]};
+    t.triangle = in.triIndex[g.first + j];
+    t.face = in.face[g.first + j];
+    t.frontFacing = lane.v[kLaneFront][j] != 0;
+    t.coverage = uint16_t(lane.v[kLaneCoverage][j]);
+  }
+}
+#endif
 
-    // Reasons counted as the scalar function does (the first that applies; degenerate and
-    // culled by Facing), without a branch per lane; then one SetupTriangle per surviving lane,
-    // in order.
-    counters.culledFrustum += hn::CountTrue(d, hn::And(live, hn::And(noBox, offScreen)));
-    counters.empty += hn::CountTrue(d, hn::And(live, empty));  // (empty excludes noBox)
-    const M survivors = hn::AndNot(hn::Or(noBox, empty), live);
+// setupBatch (frontend.hpp) without cullFirst: the triangles of `in`, a vector at a time, each
+// through the steps above; a vector whose lanes are all dropped stops early (nothing more to
+// compute). With `depth`, also their nearest bounds (and, with sink.deferred, deferred faces).
+size_t SetupLanes(const BatchInput& input, const Camera& cam, Cull cull, const DepthSetup* depth,
+                  FrontEndCounters& counters, BatchSink& sinkOut) {
+  const D d;
+  const size_t N = hn::Lanes(d);
+  // (Locals, whose fields stay in registers: the record stores below cannot alias them.)
+  const BatchInput in = input;
+  BatchSink sink = sinkOut;
+  if (!depth) sink.nearest = nullptr, sink.deferred = nullptr;  // (a deferred face needs its nearest bound)
+  for (size_t first = 0; first < in.count; first += N) {
+    LaneGroup g;
+    g.first = first;
+    g.lanes = std::min(N, in.count - first);
+    LoadGroup(in, cull, counters, g);
+    if (hn::AllFalse(d, g.live)) continue;  // all culled or degenerate: counted, nothing more to do
+    OrderVertices(g);
+    PixelBoxOf(cam, g);
+    CoverageOf(g);
+    DepthPlanesOf(g);
+    const M survivors = CountDropped(g, counters);
     if (hn::AllFalse(d, survivors)) continue;
     const V largeBox = hn::Set(d, double(kLargeBoxPixels));
-    counters.large += hn::CountTrue(d, hn::And(survivors, hn::And(hn::Ge(bw, largeBox), hn::Ge(bh, largeBox))));
-    const V nearestV = depth ? NearestStored(*depth, {na, nb, nc}, {da, db, dc}, px, py) : zero;
-    HWY_ALIGN double lane[19][kSetupBatch];
-    // (One store per field: a braced list of the vectors would be copied whole first.)
-    hn::Store(bx0, d, lane[6]), hn::Store(bx1, d, lane[7]), hn::Store(by0, d, lane[8]), hn::Store(by1, d, lane[9]);
-    hn::Store(nearestV, d, lane[16]);
-#if !(HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2)  // (the AVX2 and AVX-512 records are built from the vectors)
-    for (int k = 0; k < 3; ++k) {
-      hn::Store(X[k], d, lane[k]);
-      hn::Store(Y[k], d, lane[3 + k]);
-    }
-    hn::Store(na, d, lane[10]), hn::Store(nb, d, lane[11]), hn::Store(nc, d, lane[12]);
-    hn::Store(da, d, lane[13]), hn::Store(db, d, lane[14]), hn::Store(dc, d, lane[15]);
-    hn::Store(hn::VecFromMask(d, front), d, lane[17]);
-    hn::Store(coverage, d, lane[18]);
-#endif
-    // Deferred: back faces whose box lies in one kDeferTile square.
-    M defer = hn::FirstN(d, 0);
-    if (deferred) {
-      const V tile = hn::Set(d, 1.0 / kDeferTile);
-      auto sameTile = [&](V a, V b) { return hn::Eq(hn::Floor(hn::Mul(a, tile)), hn::Floor(hn::Mul(b, tile))); };
-      defer = hn::AndNot(front, hn::And(survivors, hn::And(sameTile(bx0, bx1), sameTile(by0, by1))));
-    }
-    uint8_t survivorBits[8] = {}, deferBits[8] = {};
-    hn::StoreMaskBits(d, defer, deferBits);
-    for (unsigned bits = deferBits[0]; bits; bits &= bits - 1) {
-      const size_t j = hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
-      DeferredFace& f = deferred[deferredWritten++];
-      for (int k = 0; k < 3; ++k) f.v[k] = vertex[k][first + j];
-      f.triangle = triIndex[first + j];
-      f.face = face[first + j];
-      f.minX = int16_t(lane[6][j]);
-      f.maxX = int16_t(lane[7][j]);
-      f.minY = int16_t(lane[8][j]);
-      f.maxY = int16_t(lane[9][j]);
-      f.nearest = lane[16][j];
-    }
-    hn::StoreMaskBits(d, hn::AndNot(defer, survivors), survivorBits);
-    // The record's 12 eight-byte words, as the AVX2 and AVX-512 paths below build them.
-    static_assert(offsetof(SetupTriangle, minX) == 24 && offsetof(SetupTriangle, depthNum) == 32 &&
-                  offsetof(SetupTriangle, depthDen) == 56 && offsetof(SetupTriangle, triangle) == 80 &&
-                  offsetof(SetupTriangle, face) == 84 && offsetof(SetupTriangle, frontFacing) == 88 &&
-                  offsetof(SetupTriangle, coverage) == 90 && offsetof(SetupTriangle, color) == 92,
-                  "the words below are the record's layout");
-#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
-    // 8 lanes (AVX-512): each record's 12 eight-byte words built a vector per word (lane j:
-    // triangle j's), the vectors transposed, and each survivor's record stored with two stores
-    // (instead of 24 fields read from the lane arrays and written one by one per record).
-    {
-      const hn::Repartition<int64_t, D> di;
-      const hn::Repartition<uint64_t, D> du;
-      const hn::Rebind<uint32_t, D> du32;
-      auto toInt = [&](V v) { return hn::BitCast(du, hn::ConvertTo(di, v)); };
-      auto low32 = [&](V v) { return hn::And(toInt(v), hn::Set(du, 0xFFFFFFFFull)); };
-      auto low16 = [&](V v) { return hn::And(toInt(v), hn::Set(du, 0xFFFFull)); };
-      const auto q0 = hn::Or(low32(X[0]), hn::ShiftLeft<32>(toInt(X[1])));
-      const auto q1 = hn::Or(low32(X[2]), hn::ShiftLeft<32>(toInt(Y[0])));
-      const auto q2 = hn::Or(low32(Y[1]), hn::ShiftLeft<32>(toInt(Y[2])));
-      const auto q3 = hn::Or(hn::Or(low16(bx0), hn::ShiftLeft<16>(low16(by0))),
-                             hn::Or(hn::ShiftLeft<32>(low16(bx1)), hn::ShiftLeft<48>(toInt(by1))));
-      HWY_ALIGN uint32_t tri8[kSetupBatch], face8[kSetupBatch];  // (the lists end with the batch)
-      hn::Vec<decltype(du32)> tris, faces;
-      if (lanes == N) {
-        tris = hn::LoadU(du32, triIndex + first), faces = hn::LoadU(du32, face + first);
-      } else {
-        for (size_t j = 0; j < N; ++j) {
-          tri8[j] = triIndex[first + std::min(j, lanes - 1)];
-          face8[j] = face[first + std::min(j, lanes - 1)];
-        }
-        tris = hn::Load(du32, tri8), faces = hn::Load(du32, face8);
-      }
-      const auto ids = hn::Or(hn::PromoteTo(du, tris), hn::ShiftLeft<32>(hn::PromoteTo(du, faces)));
-      // frontFacing (byte 88: 1 or 0), a zero byte, coverage (bytes 90-91), colour (92-95: set by the caller)
-      const auto flags = hn::Or(hn::IfThenElseZero(hn::RebindMask(du, front), hn::Set(du, 1)),
-                                hn::ShiftLeft<16>(toInt(coverage)));
-      __m512i r[8] = {q0.raw, q1.raw, q2.raw, q3.raw, hn::BitCast(du, na).raw, hn::BitCast(du, nb).raw,
-                      hn::BitCast(du, nc).raw, hn::BitCast(du, da).raw};
-      // 8x8 transpose of 64-bit words: r[j] becomes words 0-7 of triangle j's record.
-      __m512i t[8];
-      for (int i = 0; i < 8; i += 2) {
-        t[i] = _mm512_unpacklo_epi64(r[i], r[i + 1]);
-        t[i + 1] = _mm512_unpackhi_epi64(r[i], r[i + 1]);
-      }
-      for (int i = 0; i < 8; i += 4)
-        for (int k = 0; k < 2; ++k) {
-          r[i + k] = _mm512_shuffle_i64x2(t[i + k], t[i + k + 2], 0x88);
-          r[i + k + 2] = _mm512_shuffle_i64x2(t[i + k], t[i + k + 2], 0xDD);
-        }
-      __m512i row[8];
-      for (int k = 0; k < 4; ++k) {
-        row[k] = _mm512_shuffle_i64x2(r[k], r[k + 4], 0x88);
-        row[k + 4] = _mm512_shuffle_i64x2(r[k], r[k + 4], 0xDD);
-      }
-      // Words 8-11 (db, dc, ids, flags): a 4x8 transpose into halves.
-      const __m512i w8 = hn::BitCast(du, db).raw, w9 = hn::BitCast(du, dc).raw;
-      const __m512i a0 = _mm512_unpacklo_epi64(w8, w9), a1 = _mm512_unpackhi_epi64(w8, w9);
-      const __m512i b0 = _mm512_unpacklo_epi64(ids.raw, flags.raw), b1 = _mm512_unpackhi_epi64(ids.raw, flags.raw);
-      const __m512i lo = _mm512_setr_epi64(0, 1, 8, 9, 2, 3, 10, 11), hi = _mm512_setr_epi64(4, 5, 12, 13, 6, 7, 14, 15);
-      __m256i tail[8];
-      const __m512i even02 = _mm512_permutex2var_epi64(a0, lo, b0), even46 = _mm512_permutex2var_epi64(a0, hi, b0);
-      const __m512i odd13 = _mm512_permutex2var_epi64(a1, lo, b1), odd57 = _mm512_permutex2var_epi64(a1, hi, b1);
-      tail[0] = _mm512_castsi512_si256(even02), tail[2] = _mm512_extracti64x4_epi64(even02, 1);
-      tail[4] = _mm512_castsi512_si256(even46), tail[6] = _mm512_extracti64x4_epi64(even46, 1);
-      tail[1] = _mm512_castsi512_si256(odd13), tail[3] = _mm512_extracti64x4_epi64(odd13, 1);
-      tail[5] = _mm512_castsi512_si256(odd57), tail[7] = _mm512_extracti64x4_epi64(odd57, 1);
-      for (unsigned bits = survivorBits[0]; bits; bits &= bits - 1) {
-        const size_t j = hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
-        if (depth) nearest[written] = lane[16][j];
-        char* at = reinterpret_cast<char*>(out + written++);
-        _mm512_storeu_si512(at, row[j]);
-        _mm256_storeu_si256(reinterpret_cast<__m256i*>(at + 64), tail[j]);
-      }
-    }
-#elif HWY_ARCH_X86 && HWY_TARGET == HWY_AVX2
-    // 4 lanes (AVX2): the same 12 words per record as above, built as three 4x4 transposes of
-    // 64-bit words (words 0-3, 4-7, 8-11), each survivor's record stored with three 32-byte
-    // stores (instead of 24 fields read from the lane arrays and written one by one).
-    {
-      // (Every value converted is an integer well inside int32: exact. Lane j of a 64-bit word
-      // pair (a, b) holds a in its low half.)
-      auto pairs = [](__m128i a, __m128i b) {
-        return _mm256_set_m128i(_mm_unpackhi_epi32(a, b), _mm_unpacklo_epi32(a, b));
-      };
-      auto int32 = [](V v) { return _mm256_cvtpd_epi32(v.raw); };
-      const __m128i x0 = int32(X[0]), x1 = int32(X[1]), x2 = int32(X[2]);
-      const __m128i y0 = int32(Y[0]), y1 = int32(Y[1]), y2 = int32(Y[2]);
-      // The box: (minX, minY) and (maxX, maxY) as 16-bit pairs (0 <= each < 2^15 for a survivor).
-      const __m128i minXY = _mm_unpacklo_epi16(_mm_packs_epi32(int32(bx0), int32(bx0)),
-                                               _mm_packs_epi32(int32(by0), int32(by0)));
-      const __m128i maxXY = _mm_unpacklo_epi16(_mm_packs_epi32(int32(bx1), int32(bx1)),
-                                               _mm_packs_epi32(int32(by1), int32(by1)));
-      __m128i tris, faces;
-      if (lanes == N) {
-        tris = _mm_loadu_si128(reinterpret_cast<const __m128i*>(triIndex + first));
-        faces = _mm_loadu_si128(reinterpret_cast<const __m128i*>(face + first));
-      } else {  // (the lists end with the batch)
-        alignas(16) uint32_t tri4[4], face4[4];
-        for (size_t j = 0; j < 4; ++j) {
-          tri4[j] = triIndex[first + std::min(j, lanes - 1)];
-          face4[j] = face[first + std::min(j, lanes - 1)];
-        }
-        tris = _mm_load_si128(reinterpret_cast<const __m128i*>(tri4));
-        faces = _mm_load_si128(reinterpret_cast<const __m128i*>(face4));
-      }
-      // frontFacing (byte 88: 1 or 0), a zero byte, coverage (bytes 90-91), colour (92-95: set
-      // by the caller).
-      const __m128i flags32 = _mm_or_si128(int32(hn::IfThenElseZero(front, hn::Set(d, 1.0))),
-                                           _mm_slli_epi32(int32(coverage), 16));
-      auto asInt = [](V v) { return _mm256_castpd_si256(v.raw); };
-      const __m256i word[12] = {pairs(x0, x1), pairs(x2, y0), pairs(y1, y2), pairs(minXY, maxXY),
-                                asInt(na),     asInt(nb),     asInt(nc),     asInt(da),
-                                asInt(db),     asInt(dc),     pairs(tris, faces), _mm256_cvtepu32_epi64(flags32)};
-      // Three 4x4 transposes: row[g][j] holds words 4 g to 4 g + 3 of lane j's record.
-      __m256i row[3][4];
-      for (int g = 0; g < 3; ++g) {
-        const __m256i* q = word + 4 * g;
-        const __m256i t0 = _mm256_unpacklo_epi64(q[0], q[1]), t1 = _mm256_unpackhi_epi64(q[0], q[1]);
-        const __m256i t2 = _mm256_unpacklo_epi64(q[2], q[3]), t3 = _mm256_unpackhi_epi64(q[2], q[3]);
-        row[g][0] = _mm256_permute2x128_si256(t0, t2, 0x20);
-        row[g][1] = _mm256_permute2x128_si256(t1, t3, 0x20);
-        row[g][2] = _mm256_permute2x128_si256(t0, t2, 0x31);
-        row[g][3] = _mm256_permute2x128_si256(t1, t3, 0x31);
-      }
-      for (unsigned bits = survivorBits[0]; bits; bits &= bits - 1) {
-        const size_t j = hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
-        if (depth) nearest[written] = lane[16][j];
-        __m256i* at = reinterpret_cast<__m256i*>(out + written++);
-        for (int g = 0; g < 3; ++g) _mm256_storeu_si256(at + g, row[g][j]);
-      }
-    }
-#else
-    for (unsigned bits = survivorBits[0]; bits; bits &= bits - 1) {
-      const size_t j = hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
-      if (depth) nearest[written] = lane[16][j];
-      SetupTriangle& t = out[written++];
-      for (int k = 0; k < 3; ++k) {
-        t.x[k] = int32_t(lane[k][j]);
-        t.y[k] = int32_t(lane[3 + k][j]);
-      }
-      t.minX = int16_t(lane[6][j]);
-      t.maxX = int16_t(lane[7][j]);
-      t.minY = int16_t(lane[8][j]);
-      t.maxY = int16_t(lane[9][j]);
-      t.depthNum = Plane{lane[10][j], lane[11][j], lane[12][j]};
-      t.depthDen = Plane{lane[13][j], lane[14][j], lane[15][j]};
-      t.triangle = triIndex[first + j];
-      t.face = face[first + j];
-      t.frontFacing = lane[17][j] != 0;
-      t.coverage = uint16_t(lane[18][j]);
-    }
-#endif
+    counters.large +=
+        hn::CountTrue(d, hn::And(survivors, hn::And(hn::Ge(g.width, largeBox), hn::Ge(g.height, largeBox))));
+    const V nearest = depth ? NearestStored(*depth, g.depthNum, g.depthDen, g.px, g.py) : hn::Zero(d);
+    LaneArrays lane;
+    StoreLanes(g, nearest, lane);
+    const M deferred = WriteDeferred(g, survivors, lane, in, sink);
+    uint8_t survivorBits[8] = {};
+    hn::StoreMaskBits(d, hn::AndNot(deferred, survivors), survivorBits);
+    WriteRecords(g, survivorBits[0], lane, in, sink);
   }
-  if (deferredCount) *deferredCount = deferredWritten;
-  return written;
+  sinkOut.written = sink.written, sinkOut.deferredWritten = sink.deferredWritten;
+  return sink.written;
+}
+
+// The facing test of `in`'s triangles [from, end), a vector at a time (counting those it drops),
+// and the triangles it keeps copied to `kept` (kept.count of them, from 0).
+template <size_t kPart>
+struct KeptLists {
+  uint32_t vertex[3][kPart], triangle[kPart], face[kPart];
+  const uint32_t* lists[3] = {vertex[0], vertex[1], vertex[2]};
+  size_t count = 0;
+};
+template <size_t kPart>
+HWY_INLINE void KeepFacing(const BatchInput& in, size_t from, size_t end, Cull cull, FrontEndCounters& counters,
+                           KeptLists<kPart>& kept) {
+  const D d;
+  const size_t N = hn::Lanes(d);
+  kept.count = 0;
+  for (size_t first = from; first < end; first += N) {
+    const size_t lanes = std::min(N, end - first);
+    V sx[3], sy[3], X[3], Y[3], num[3], den[3];
+    LoadVertices(in.projected, in.vertex, first, lanes, sx, sy, num, den);
+    M front, live;
+    Facing(sx, sy, cull, lanes, counters, X, Y, front, live);
+    uint8_t keepBits[8] = {};
+    hn::StoreMaskBits(d, live, keepBits);
+    for (unsigned bits = keepBits[0]; bits; bits &= bits - 1) {
+      const size_t j = first + hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
+      for (int k = 0; k < 3; ++k) kept.vertex[k][kept.count] = in.vertex[k][j];
+      kept.triangle[kept.count] = in.triIndex[j];
+      kept.face[kept.count++] = in.face[j];
+    }
+  }
 }
 
 // Set-up of `count` triangles (see setupBatch in frontend.hpp). With cullFirst (and a cull),
@@ -575,43 +743,27 @@ size_t SetupLanes(const ProjectedVertex* projected, const uint32_t* const* verte
 // a kept one those twice.
 size_t SetupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
                   const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
-                  SetupTriangle* out, const DepthSetup* depth, double* nearest, DeferredFace* deferred,
-                  size_t* deferredCount, bool cullFirst) {
-  if (cull == Cull::None || !cullFirst)
-    return SetupLanes(projected, vertex, triIndex, face, count, cam, cull, counters, out, depth, nearest, deferred,
-                      deferredCount);
-  const D d;
-  const size_t N = hn::Lanes(d);
-  constexpr size_t kPart = 64;
-  uint32_t keptVertex[3][kPart], keptTriangle[kPart], keptFace[kPart];
-  const uint32_t* keptLists[3] = {keptVertex[0], keptVertex[1], keptVertex[2]};
-  size_t written = 0, deferredWritten = 0;
-  for (size_t from = 0; from < count; from += kPart) {
-    const size_t end = std::min(count, from + kPart);
-    size_t kept = 0;
-    for (size_t first = from; first < end; first += N) {
-      const size_t lanes = std::min(N, end - first);
-      V sx[3], sy[3], X[3], Y[3], num[3], den[3];
-      LoadVertices(projected, vertex, first, lanes, sx, sy, num, den);
-      M front, live;
-      Facing(sx, sy, cull, lanes, counters, X, Y, front, live);
-      uint8_t keepBits[8] = {};
-      hn::StoreMaskBits(d, live, keepBits);
-      for (unsigned bits = keepBits[0]; bits; bits &= bits - 1) {
-        const size_t j = first + hwy::Num0BitsBelowLS1Bit_Nonzero32(bits);
-        for (int k = 0; k < 3; ++k) keptVertex[k][kept] = vertex[k][j];
-        keptTriangle[kept] = triIndex[j];
-        keptFace[kept++] = face[j];
-      }
+                  SetupTriangle* out, const SetupBatchOptions& options) {
+  const BatchInput in{projected, vertex, triIndex, face, count};
+  BatchSink sink{out, options.nearest, options.deferred};
+  if (cull == Cull::None || !options.cullFirst) {
+    SetupLanes(in, cam, cull, options.depth, counters, sink);
+  } else {
+    constexpr size_t kPart = 64;
+    KeptLists<kPart> kept;
+    for (size_t from = 0; from < count; from += kPart) {
+      KeepFacing(in, from, std::min(count, from + kPart), cull, counters, kept);
+      // The kept triangles' set-up, written after the earlier parts' (faces are deferred only
+      // without a cull, but that is not assumed here).
+      const BatchInput part{projected, kept.lists, kept.triangle, kept.face, kept.count};
+      BatchSink rest{sink.out + sink.written, sink.nearest ? sink.nearest + sink.written : nullptr,
+                     sink.deferred ? sink.deferred + sink.deferredWritten : nullptr};
+      SetupLanes(part, cam, cull, options.depth, counters, rest);
+      sink.written += rest.written, sink.deferredWritten += rest.deferredWritten;
     }
-    size_t deferredHere = 0;  // (none: faces are deferred only without a cull; kept general)
-    written += SetupLanes(projected, keptLists, keptTriangle, keptFace, kept, cam, cull, counters, out + written,
-                          depth, nearest ? nearest + written : nullptr, deferred ? deferred + deferredWritten : nullptr,
-                          &deferredHere);
-    deferredWritten += deferredHere;
   }
-  if (deferredCount) *deferredCount = deferredWritten;
-  return written;
+  if (options.deferredCount) *options.deferredCount = sink.deferredWritten;
+  return sink.written;
 }
 
 // transformVertices() (frontend.hpp): transformVertex, clipOutcode and projectVertex
@@ -752,10 +904,8 @@ void transformVertices(const dvec3* positions, size_t count, const dmat4& M, con
 
 size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
                   const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
-                  SetupTriangle* out, const DepthSetup* depth, double* nearest, DeferredFace* deferred,
-                  size_t* deferredCount, bool cullFirst) {
-  return HWY_DYNAMIC_DISPATCH(SetupBatch)(projected, vertex, triIndex, face, count, cam, cull, counters, out, depth,
-                                          nearest, deferred, deferredCount, cullFirst);
+                  SetupTriangle* out, const SetupBatchOptions& options) {
+  return HWY_DYNAMIC_DISPATCH(SetupBatch)(projected, vertex, triIndex, face, count, cam, cull, counters, out, options);
 }
 }  // namespace hsr
 #endif
