@@ -1,8 +1,9 @@
-// The half-space (edge function) rasterizer, the default: walks the triangle's bounding box in
-// 8x8 blocks, rejects or accepts whole blocks by the edge functions at the block's corner pixel
-// centres, and tests pixels one by one only in partial blocks. Calls visit(x, y, eyeDepth) for
-// every covered pixel centre, row-major within a block. The block loop is the unit the fast
-// path bins into tiles and vectorises. Consumed by the algorithms (algorithms/*.cpp).
+// The half-space (edge function) rasterizer, the scalar reference: walks the triangle's bounding
+// box in 8x8 blocks, rejects or accepts whole blocks by the edge functions at the block's corner
+// pixel centres, and tests pixels one by one only in partial blocks. Calls visit(x, y, eyeDepth)
+// for every covered pixel centre, row-major within a block. The default rasterizer is the tiled
+// SIMD one (raster/tiled.hpp), which bins triangles into tiles, vectorises this block loop and
+// must match this one bit for bit. Consumed by the algorithms (algorithms/*.cpp).
 #pragma once
 #include "raster/edge.hpp"
 

@@ -17,6 +17,14 @@
 //    so the visit order does not matter: per pixel the nearest value and, among equals, the
 //    first submitted triangle — what the reference leaves drawing in submission order.
 // Hence stored values and winners are bit-identical to the scalar reference.
+//
+// RasterizeTileT reads top-down. Per triangle: rejected by the tile's farthest value, or drawn
+// by one of DrawCoverage (set-up's list of covered centres), TryWholeTile (the tile becomes its
+// plane), DrawSmall (a box of at most kSmallPixels centres, in scalar code) or DrawBlocks, which
+// sets up (SetUpBlocks), classifies every block row of the box (ClassifyRow) and visits the
+// blocks left (VisitBlock: TryWholeBlock, ReadyLazyBlock, ReadyColumn, StartBlockRows,
+// DrawBlockRows — the inner loop — and UpdateBlockBounds). The steps share a TileCtx (per tile)
+// and a TriangleCtx (per triangle), and are all force-inlined into the one loop.
 
 // Per-target include guard (Highway's pattern: this file is included once per target).
 #if defined(HSR_RASTER_TILE_KERNEL_INL_H_) == defined(HWY_TARGET_TOGGLE)
@@ -42,8 +50,8 @@
 #include "raster/edge.hpp"
 #include "raster/tiled.hpp"
 
-// For the kernel's lambdas that must not become calls: made calls, their captures live in
-// memory (random --occlusion --cull back took 1.4x the time).
+// For the kernel's lambdas that must not become calls: made calls, their captures would live
+// in memory. (Functions use HWY_INLINE, which forces inlining the same way.)
 #ifndef HSR_ALWAYS_INLINE
 #define HSR_ALWAYS_INLINE __attribute__((always_inline))
 #endif
@@ -62,10 +70,22 @@ using V = hn::Vec<D>;
 using Mask = hn::Mask<D>;
 using DU = hn::RebindToUnsigned<D>;           // triangle ids, same lane count and size
 
+// The tile in blocks: block columns and rows; the vectors of a block's row (one on AVX-512) and
+// of a row of block columns (lane: block column).
+inline constexpr int kBlocksX = kTileSize / kBlockSize;
+inline constexpr int kBlockRows = kTileSize / kBlockSize;
+inline constexpr size_t kRowVectors = size_t(kBlockSize) / hn::MaxLanes(D());
+inline constexpr size_t kColumnVectors = size_t(kBlocksX) / hn::MaxLanes(D());
+static_assert(kRowVectors >= 1 && size_t(kBlockSize) % hn::MaxLanes(D()) == 0);
+static_assert(kColumnVectors >= 1 && size_t(kBlocksX) % hn::MaxLanes(D()) == 0);
+
+// Whether greater stored values are nearer (the format's compare direction).
+constexpr bool GreaterWins(DepthMapping M) { return M == DepthMapping::Reversed || M == DepthMapping::Inv; }
+
 // acc + 1 in the lanes of m (the rows' per-lane counts): one masked add with AVX-512's mask
 // registers; elsewhere masks are vectors of all-ones (-1) lanes, and subtracting one is one
 // operation instead of an add and a blend. The rows wrote when a lane of rowWrites moved (no
-// mask gathered per row). Random --occlusion --cull back 1.05x, city 1.03x on AVX2.
+// mask gathered per row).
 HWY_INLINE hn::Vec<DU> CountIn(hn::Vec<DU> acc, Mask m) {
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX3
   const DU du;
@@ -200,7 +220,7 @@ struct StoredRangeV {
 };
 template <DepthStorage S, DepthMapping M>
 HWY_INLINE StoredRangeV RectRange(const MappedPlanes& m, double pErr, V aXLow, V aXHigh, double top, double bottom) {
-  constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
+  constexpr bool kGreater = GreaterWins(M);
   const D d;
   const Plane& p = m.p;
   const V c = hn::Set(d, p.c), err = hn::Set(d, pErr);
@@ -248,14 +268,13 @@ struct TileFrame : TileRect {
   double storedOne;       // the stored value of mapped depth 1 (that of 0 is 0)
   // Whether block b lies wholly in the image (its cells all drawable).
   bool blockInImage(int b) const {
-    constexpr int kBlocksX = kTileSize / kBlockSize;
     return (b % kBlocksX + 1) * kBlockSize <= w && (b / kBlocksX + 1) * kBlockSize <= h;
   }
 };
 
 template <DepthStorage S, DepthMapping M>
 TileFrame MakeTileFrame(const TileJob& job) {
-  constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
+  constexpr bool kGreater = GreaterWins(M);
   TileFrame f;
   static_cast<TileRect&>(f) = RectOf(job);
   f.clear = double(quantizeDepth<S>(job.depth.format.clearValue()));
@@ -273,8 +292,7 @@ TileFrame MakeTileFrame(const TileJob& job) {
 template <DepthStorage S, DepthMapping M, bool kIds>
 HWY_INLINE void FillBlock(TileScratch& s, const TileFrame& f, int b, bool plane, const MappedPlanes& m, double value,
                           uint64_t key, double& farOut, double& nearOut) {
-  constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
-  constexpr int kBlocksX = kTileSize / kBlockSize;
+  constexpr bool kGreater = GreaterWins(M);
   const D d;
   const DU du;
   const size_t N = hn::Lanes(d);
@@ -318,12 +336,10 @@ HWY_INLINE void FillBlock(TileScratch& s, const TileFrame& f, int b, bool plane,
 // Pixels, with the bounds of each block, so that triangles can be drawn pixel by pixel from here
 // on: the blocks wholly in the image keep the state, one per block (blockClear, or the plane as
 // blockKey), written only when a triangle lands on them (MaterializeBlock); the others are
-// written. Measured for planes against
-// writing every block at once (alternating runs, 2 threads): random n=10000 B/A 0.91–0.95, city
-// 0.98–1.00, sphere 0.98, layers 0.97.
+// written. (Faster for planes than writing every block at once: see docs/benchmarks.md.)
 template <DepthStorage S, DepthMapping M, bool kIds>
 void Materialize(const TileJob& job, const TileFrame& f) {
-  constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
+  constexpr bool kGreater = GreaterWins(M);
   TileScratch& s = *job.scratch;
   const bool plane = s.state == TileState::Plane;
   const MappedPlanes m = plane ? mapPlanes<M>(s.plane->depthNum, s.plane->depthDen, job.depth.near, job.depth.far,
@@ -332,7 +348,7 @@ void Materialize(const TileJob& job, const TileFrame& f) {
   const double pErr = planeError(m.p, f.x0 + f.w, f.y0 + f.h), qErr = planeError(m.q, f.x0 + f.w, f.y0 + f.h);
   double tileFar = f.nearestPossible;
   for (int b = 0; b < kBlocksPerTile; ++b) {
-    const int bx = (b % (kTileSize / kBlockSize)) * kBlockSize, by = (b / (kTileSize / kBlockSize)) * kBlockSize;
+    const int bx = (b % kBlocksX) * kBlockSize, by = (b / kBlocksX) * kBlockSize;
     s.blockClear[b] = false;
     if (!plane && f.blockInImage(b)) {
       s.blockKey[b] = 0;
@@ -367,7 +383,6 @@ HWY_INLINE bool Lazy(const TileScratch& s, int b) { return s.blockKey[b] != 0 ||
 // StoredDepth computes it), without the masks and the bounds it gathers.
 template <DepthStorage S, bool kIds>
 HWY_INLINE void FillPlaneBlock(TileScratch& s, const TileFrame& f, int b, const MappedPlanes& m, uint64_t key) {
-  constexpr int kBlocksX = kTileSize / kBlockSize;
   constexpr size_t kVectors = size_t(kBlockSize) / hn::MaxLanes(D());
   const D d;
   const DU du;
@@ -393,9 +408,9 @@ HWY_INLINE void FillPlaneBlock(TileScratch& s, const TileFrame& f, int b, const 
 
 // Writes block b's uniform state (state Pixels, Lazy(s, b)) — its plane or the clear value —
 // into the pixel buffers, as Materialize does for a tile; its bounds stay as they are (still
-// valid). The plane is mapped with the kernel's reciprocal cache (the same bits as without).
-// (Random --occlusion --cull back: MaterializeBlock took 5% of the time, a third of that in
-// mapPlanes' division and a fifth in FillBlock's masks and bounds.)
+// valid). The plane is mapped with the kernel's reciprocal cache (the same bits as without),
+// and a block in the image is written by FillPlaneBlock, without FillBlock's masks and bounds:
+// this runs often enough for both to count.
 template <DepthStorage S, DepthMapping M, bool kIds>
 void MaterializeBlock(const TileJob& job, const TileFrame& f, int b, ReciprocalCache& reciprocal) {
   TileScratch& s = *job.scratch;
@@ -415,22 +430,759 @@ void MaterializeBlock(const TileJob& job, const TileFrame& f, int b, ReciprocalC
 // Triangles whose box in the tile has at most this many pixel centres take the scalar path.
 inline constexpr int kSmallPixels = 16;
 
+// The pixel centres at the corners of the tile's part of the image, fixed point (for the edge
+// functions) and in pixels (for the plane's bounds): the whole-tile test's.
+struct TileCorners {
+  int64_t x[2], y[2];
+  double rectX[4], rectY[4];
+};
+
+// One tile's pass through its triangles (RasterizeTileT): the tile's constants and the state its
+// steps share. A local of RasterizeTileT handed by reference to force-inlined steps only, so its
+// members stay in registers as plain locals would; what has to live in memory is referenced.
 template <DepthStorage S, DepthMapping M, bool kIds>
-void RasterizeTileT(const TileJob& job) {
-  constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
-  constexpr int kBlocksX = kTileSize / kBlockSize;
+struct TileCtx {
+  const TileJob& job;
+  TileScratch& s;
+  const Bins& bins;
+  const TileFrame& tf;
+  const TileCorners& corners;
+  ReciprocalCache& reciprocal;  // mapPlanes' division, once for the tile's triangles that share it
+  RasterCounters& count;        // added to the job's at the end
+  int x0, y0, w, h;             // tf's
+  V nearestV, farthestV, clearV;  // tf's values broadcast
+  V lane;                         // lane j: j
+  uint64_t tests = 0, writes = 0;  // the hottest counts, kept apart from `count` (in registers)
+  // The blocks of the classified triangles' boxes, and those of them culled in classification.
+  uint64_t blocksInBoxes = 0, blocksCulledHere = 0;
+  // The block rows' counts, per lane (summed at the end): CountIn per row instead of popcounts.
+  hn::Vec<DU> rowTests, rowWrites;
+  // Blocks written by the small-triangle path since their farthest values were computed (those
+  // values stay valid bounds meanwhile: writes only bring stored values nearer), and the
+  // triangles met since.
+  uint64_t dirtyBlocks = 0;
+  unsigned sinceRefresh = 0;
+};
+
+// One triangle of the tile past the tile's bound: its record, mapped planes, key (triangleKey)
+// and nearest possible stored value.
+struct TriangleCtx {
+  const SetupTriangle& t;
+  const MappedPlanes& m;
+  uint64_t key;
+  double qNear;
+};
+
+// The farthest values of the blocks the small-triangle path wrote (dirtyBlocks), read again;
+// the tile's farthest value is then stale.
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void RefreshDirty(TileCtx<S, M, kIds>& c) {
+  constexpr bool kGreater = GreaterWins(M);
+  const D d;
+  const size_t N = hn::Lanes(d);
+  for (uint64_t bits = c.dirtyBlocks; bits; bits &= bits - 1) {
+    const int b = hwy::Num0BitsBelowLS1Bit_Nonzero64(bits);
+    const size_t first = size_t(b / kBlocksX) * kBlockSize * kTileSize + size_t(b % kBlocksX) * kBlockSize;
+    V far = c.nearestV;
+    for (int y = 0; y < kBlockSize; ++y)
+      for (size_t k = 0; k < size_t(kBlockSize); k += N)
+        far = Farther<kGreater>(far, hn::Load(d, c.s.depth + first + size_t(y) * kTileSize + k));
+    c.s.blockFar[b] = FarthestLane<kGreater>(far);
+  }
+  c.dirtyBlocks = 0;
+  c.s.tileFarStale = true;
+}
+
+// The tile's farthest value: the farthest of its blocks'.
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void RefreshTileFar(TileCtx<S, M, kIds>& c) {
+  constexpr bool kGreater = GreaterWins(M);
+  const D d;
+  const size_t N = hn::Lanes(d);
+  V far = c.nearestV;
+  for (size_t b = 0; b < size_t(kBlocksPerTile); b += N) far = Farther<kGreater>(far, hn::Load(d, c.s.blockFar + b));
+  c.s.tileFar = FarthestLane<kGreater>(far);
+  c.s.tileFarStale = false;
+}
+
+// Fetches the record of the triangle kAhead places on, unless the tile's bound rejects it
+// already (nearest first, most hidden ones are rejected unread): the records are scattered over
+// the chunks. (12 rather than 6, since small triangles' records carry their coverage list: see
+// docs/benchmarks.md.)
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void PrefetchAhead(const TileCtx<S, M, kIds>& c, const std::vector<TileEntry>& order, size_t item,
+                              size_t end) {
+  constexpr size_t kAhead = 12;
+  if (item + kAhead < end && !Beaten<M, kIds>(order[item + kAhead].nearest, c.s.tileFar)) {
+    const SetupTriangle* ahead = &c.bins.triangle(order[item + kAhead].key);
+    hwy::Prefetch(ahead);
+    hwy::Prefetch(reinterpret_cast<const char*>(ahead) + 64);
+  }
+}
+
+// Turns the tile to state Pixels (Materialize) unless it is there already: from then on its
+// triangles are drawn into the pixel buffers, with bounds per block.
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void EnsurePixels(TileCtx<S, M, kIds>& c) {
+  if (c.s.state != TileState::Pixels) {
+    Materialize<S, M, kIds>(c.job, c.tf);
+    c.dirtyBlocks = 0;
+  }
+}
+
+// ---- Small triangles: pixel by pixel, in scalar code ----
+
+// The fragment at tile-local pixel (x, y) (pRow = m.p.b * Y, qRow = m.q.b * Y for its row's
+// centre Y), with the same operations as the lanes of DrawBlockRows: tested and, when it wins,
+// stored, with its block's and the tile's nearest values moved.
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void DrawPixel(TileCtx<S, M, kIds>& c, const TriangleCtx& tri, int x, int y, double pRow, double qRow) {
+  constexpr bool kGreater = GreaterWins(M);
+  TileScratch& s = c.s;
+  const size_t at = size_t(y) * kTileSize + size_t(x);
+  const double stored = s.depth[at];
+  if (Beaten<M, kIds>(tri.qNear, stored)) return;
+  const double z = fragmentStored<S>(tri.m, double(x) + (double(c.x0) + 0.5), pRow, qRow);
+  ++c.tests;
+  if (storedNearer<M>(z, stored) || (kIds && z == stored && tri.key < s.triangle[at])) {
+    ++c.writes;
+    s.depth[at] = z;
+    if constexpr (kIds) s.triangle[at] = tri.key;
+    const int b = (y / kBlockSize) * kBlocksX + x / kBlockSize;
+    c.dirtyBlocks |= uint64_t(1) << b;
+    // The nearer value without a branch (a data-dependent branch per bound was slower).
+    s.blockNear[b] = kGreater ? std::max(z, s.blockNear[b]) : std::min(z, s.blockNear[b]);
+    s.tileNear = kGreater ? std::max(z, s.tileNear) : std::min(z, s.tileNear);
+  }
+}
+
+// A small triangle's box in the tile (tile-local, inclusive): whether it is behind everything
+// stored in the blocks the box touches (their farthest values may be stale, still bounds); if
+// not, those blocks are made ready to be drawn pixel by pixel. Turns the tile to state Pixels
+// first (the blocks' bounds are kept there).
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE bool SmallBeaten(TileCtx<S, M, kIds>& c, const TriangleCtx& tri, int bx0, int bx1, int by0, int by1) {
+  EnsurePixels(c);
+  TileScratch& s = c.s;
+  const double qNear = tri.qNear;
+  const int first = (by0 / kBlockSize) * kBlocksX + bx0 / kBlockSize;
+  const int across = bx1 / kBlockSize - bx0 / kBlockSize, down = by1 / kBlockSize - by0 / kBlockSize;
+  if (across <= 1 && down <= 1) {  // (mostly) 1 to 4 blocks: their corners, repeated when fewer
+    const int b[4] = {first, first + across, first + down * kBlocksX, first + down * kBlocksX + across};
+    if (Beaten<M, kIds>(qNear, s.blockFar[b[0]]) & Beaten<M, kIds>(qNear, s.blockFar[b[1]]) &
+        Beaten<M, kIds>(qNear, s.blockFar[b[2]]) & Beaten<M, kIds>(qNear, s.blockFar[b[3]])) {
+      if constexpr (kCountBlocks) ++c.count.blocksCulled;
+      return true;
+    }
+    for (int i = 0; i < 4; ++i)  // (a block repeated is no longer Lazy the second time)
+      if (Lazy(s, b[i])) MaterializeBlock<S, M, kIds>(c.job, c.tf, b[i], c.reciprocal);
+    return false;
+  }
+  bool beaten = true;
+  for (int by = 0; by <= down; ++by)
+    for (int bx = 0; bx <= across; ++bx) beaten &= Beaten<M, kIds>(qNear, s.blockFar[first + by * kBlocksX + bx]);
+  if (beaten) {
+    if constexpr (kCountBlocks) ++c.count.blocksCulled;
+    return true;
+  }
+  for (int by = 0; by <= down; ++by)
+    for (int bx = 0; bx <= across; ++bx)
+      if (const int b = first + by * kBlocksX + bx; Lazy(s, b)) MaterializeBlock<S, M, kIds>(c.job, c.tf, b, c.reciprocal);
+  return false;
+}
+
+// A triangle whose covered centres set-up listed (SetupTriangle::coverage: a box of at most 4x4
+// pixels): no edge functions, only its covered pixels in the tile are visited.
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void DrawCoverage(TileCtx<S, M, kIds>& c, const TriangleCtx& tri) {
+  const SetupTriangle& t = tri.t;
+  const int ox = t.minX - c.x0, oy = t.minY - c.y0;  // the box's corner, tile-local (maybe outside)
+  const int cx0 = std::max(-ox, 0), cx1 = std::min(c.w - 1 - ox, kCoverageBox - 1);
+  const int cy0 = std::max(-oy, 0), cy1 = std::min(c.h - 1 - oy, kCoverageBox - 1);
+  const unsigned columns = ((2u << cx1) - 1) & ~((1u << cx0) - 1);
+  const unsigned rows = ((1u << (kCoverageBox * (cy1 + 1))) - 1) & ~((1u << (kCoverageBox * cy0)) - 1);
+  const unsigned bits = t.coverage & rows & (columns * 0x1111u);
+  if (!bits || SmallBeaten(c, tri, ox + cx0, ox + cx1, oy + cy0, oy + cy1)) return;
+  for (unsigned left = bits; left; left &= left - 1) {
+    const int bit = int(hwy::Num0BitsBelowLS1Bit_Nonzero32(left));
+    const int y = oy + bit / kCoverageBox;
+    const double Y = double(c.y0 + y) + 0.5;
+    DrawPixel(c, tri, ox + bit % kCoverageBox, y, tri.m.p.b * Y, tri.m.q.b * Y);
+  }
+}
+
+// A triangle's pixel box within the tile, tile-local and inclusive.
+struct PixelBox {
+  int rx0, rx1, ry0, ry1;
+};
+
+// A small triangle without a coverage list (a box of at most kSmallPixels centres in the tile):
+// its edge functions stepped pixel by pixel.
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void DrawSmall(TileCtx<S, M, kIds>& c, const TriangleCtx& tri, const Edge (&e)[3], const PixelBox& box) {
+  if (SmallBeaten(c, tri, box.rx0, box.rx1, box.ry0, box.ry1)) return;
+  int64_t rowE[3];
+  for (int i = 0; i < 3; ++i) rowE[i] = e[i].at(centerFixed(c.x0 + box.rx0), centerFixed(c.y0 + box.ry0));
+  for (int y = box.ry0; y <= box.ry1; ++y) {
+    const double Y = double(c.y0 + y) + 0.5, pRow = tri.m.p.b * Y, qRow = tri.m.q.b * Y;
+    int64_t E[3] = {rowE[0], rowE[1], rowE[2]};
+    for (int x = box.rx0; x <= box.rx1; ++x) {
+      if (E[0] >= e[0].bias && E[1] >= e[1].bias && E[2] >= e[2].bias) DrawPixel(c, tri, x, y, pRow, qRow);
+      for (int i = 0; i < 3; ++i) E[i] += e[i].stepX();
+    }
+    for (int i = 0; i < 3; ++i) rowE[i] += e[i].stepY();
+  }
+}
+
+// ---- The whole tile ----
+
+// Whole tile: the triangle covers every pixel centre of the tile (its four corner centres;
+// coverage is convex) and its farthest value is nearer than the nearest stored, so it wins
+// every pixel and the tile becomes its plane, in O(1) ("lossless z-buffer compression").
+// Returns whether it did.
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE bool TryWholeTile(TileCtx<S, M, kIds>& c, const TriangleCtx& tri, const Edge (&e)[3]) {
+  const SetupTriangle& t = tri.t;
+  TileScratch& s = c.s;
+  if (!(t.minX <= c.x0 && t.maxX >= c.x0 + c.w - 1 && t.minY <= c.y0 && t.maxY >= c.y0 + c.h - 1)) return false;
+  bool covers = true;
+  for (const Edge& edge : e)
+    for (int k = 0; k < 4; ++k) covers &= edge.at(c.corners.x[k & 1], c.corners.y[k >> 1]) >= edge.bias;
+  if (!covers) return false;
+  const StoredRange r = storedRange<S, M>(tri.m, c.corners.rectX, c.corners.rectY, 4);
+  if (!storedNearer<M>(r.farthest, s.tileNear)) return false;
+  s.state = TileState::Plane;
+  s.plane = &t;
+  s.planeKey = tri.key;
+  s.tileFar = r.farthest;
+  s.tileNear = r.nearest;
+  s.tileFarStale = false;
+  c.dirtyBlocks = 0;  // the pixel buffers are no longer the tile's values
+  c.tests += uint64_t(c.w) * uint64_t(c.h);
+  c.writes += uint64_t(c.w) * uint64_t(c.h);
+  ++c.count.tilesWhole;
+  return true;
+}
+
+// ---- Larger triangles: block by block, a vector of lanes at a time ----
+
+// What the block path needs of one triangle, set up once (SetUpBlocks): its box in pixels and
+// in blocks; per edge, the lanes' steps, the bias and the row terms; its depth's shortcuts and
+// error bounds; and, per vector of block columns, what classification needs that does not
+// depend on the block row.
+struct BlockSetup : PixelBox {
+  const Edge* e;  // the triangle's three edges
+  int bxFirst, bxLast, byFirst, byLast;
+  V laneE[3], biasV[3], stepYV[3];  // per edge: lane j's j stepX; bias; stepY
+  // Per edge, in double (exact: |dx| < 2^24, |ay| < 2^23): dx, dx ay, dx ay + bias.
+  double edgeDx[3], edgeDxAy[3], edgeDxAyBias[3];
+  V qNearV;
+  hn::Vec<DU> idV;
+  // A triangle parallel to the image plane has both planes constant (a = b = 0): a*X and b*Y
+  // are zeros of a fixed sign, so every pixel computes the same bits as its first one, zConstant.
+  bool constantDepth;
+  V zConstant;
+  double pErr, qErr;  // the planes' evaluation errors over the tile, for the bounds of its blocks
+  // An affine mapped depth (q = 1: every perspective z, reversed and inv format) gets its bounds
+  // over each block's part of the box in classification, a vector of blocks at a time (the lanes
+  // repeat storedRangeOverRect's operations: the same bits).
+  bool rectBounds;
+  // Per vector of block columns (lane: block column): whether the column meets the box, P's a X
+  // at the corners of the columns' parts of the box that bound it, and the edge functions' x
+  // terms, dy (X - ax), at the corners that make them largest and smallest.
+  V inBoxV[kColumnVectors], pXLow[kColumnVectors], pXHigh[kColumnVectors];
+  V xLargest[3][kColumnVectors], xSmallest[3][kColumnVectors];
+  uint32_t columnReady;  // bit bx: BlockScratch holds block column bx's vectors (ReadyColumn)
+};
+
+// What the visits read by index: each block row's classification (ClassifyRow) and each block
+// column's vectors (ReadyColumn).
+struct BlockScratch {
+  HWY_ALIGN double rectNearest[kBlockRows][kBlocksX], rectFarthest[kBlockRows][kBlocksX];  // rectBounds' bounds
+  uint64_t visit[kBlockRows];      // bit bx: the block is drawn
+  uint64_t inside[kBlockRows][3];  // bit bx: every centre of the block's part of the box is inside edge i
+  double rowEdge[kBlockRows][3];   // per edge: dx (py - ay) at the first row of the blocks' parts of the box
+  // Per vector of a block's row: its columns in the box, a X of both planes, the edge functions'
+  // x terms (lane j: j stepX - dy (px - ax) at the vector's first pixel px).
+  V colIn[kBlocksX][kRowVectors], colPX[kBlocksX][kRowVectors], colQX[kBlocksX][kRowVectors];
+  V colEdge[3][kBlocksX][kRowVectors];
+};
+
+// BlockSetup's terms per vector of block columns (see there).
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void SetUpColumns(const TileCtx<S, M, kIds>& c, const TriangleCtx& tri, BlockSetup& bs) {
+  const D d;
+  const size_t N = hn::Lanes(d);
+  const MappedPlanes& m = tri.m;
+  const Edge* e = bs.e;
+  for (size_t k = 0; k < size_t(kBlocksX); k += N) {
+    const V column = hn::Add(c.lane, hn::Set(d, double(k)));
+    const Mask inBox =
+        hn::And(hn::Ge(column, hn::Set(d, double(bs.bxFirst))), hn::Le(column, hn::Set(d, double(bs.bxLast))));
+    bs.inBoxV[k / N] = hn::VecFromMask(d, inBox);
+    if (hn::AllFalse(d, inBox)) continue;
+    const V firstColumn = hn::Mul(column, hn::Set(d, double(kBlockSize)));
+    const V leftCol = hn::Max(firstColumn, hn::Set(d, double(bs.rx0)));
+    const V rightCol = hn::Min(hn::Add(firstColumn, hn::Set(d, double(kBlockSize - 1))), hn::Set(d, double(bs.rx1)));
+    if (bs.rectBounds) {
+      const V leftPx = hn::Add(leftCol, hn::Set(d, double(c.x0) + 0.5));
+      const V rightPx = hn::Add(rightCol, hn::Set(d, double(c.x0) + 0.5));
+      bs.pXLow[k / N] = hn::Mul(hn::Set(d, m.p.a), m.p.a >= 0 ? leftPx : rightPx);
+      bs.pXHigh[k / N] = hn::Mul(hn::Set(d, m.p.a), m.p.a >= 0 ? rightPx : leftPx);
+    }
+    const V one = hn::Set(d, double(kSubpixelOne)), half = hn::Set(d, double(kSubpixelOne / 2));
+    const V origin = hn::Set(d, double(c.x0));
+    const V left = hn::Add(hn::Mul(hn::Add(leftCol, origin), one), half);  // centerFixed, exact
+    const V right = hn::Add(hn::Mul(hn::Add(rightCol, origin), one), half);
+    for (int i = 0; i < 3; ++i) {
+      const V dy = hn::Set(d, double(e[i].dy)), ax = hn::Set(d, double(e[i].ax));
+      bs.xLargest[i][k / N] = hn::Mul(dy, hn::Sub(e[i].dy < 0 ? right : left, ax));
+      bs.xSmallest[i][k / N] = hn::Mul(dy, hn::Sub(e[i].dy < 0 ? left : right, ax));
+    }
+  }
+}
+
+// Sets up the block path of triangle `tri` over `box` (BlockSetup).
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void SetUpBlocks(TileCtx<S, M, kIds>& c, const TriangleCtx& tri, const Edge (&e)[3], const PixelBox& box,
+                            BlockSetup& bs) {
+  const D d;
+  const DU du;
+  const SetupTriangle& t = tri.t;
+  const MappedPlanes& m = tri.m;
+  static_cast<PixelBox&>(bs) = box;
+  bs.e = e;
+  for (int i = 0; i < 3; ++i) {
+    bs.laneE[i] = hn::Mul(c.lane, hn::Set(d, double(e[i].stepX())));  // lane j: j * stepX, exact
+    bs.biasV[i] = hn::Set(d, double(e[i].bias));
+  }
+  bs.qNearV = hn::Set(d, tri.qNear);
+  bs.idV = hn::Set(du, tri.key);
+  bs.constantDepth = t.depthNum.a == 0 && t.depthNum.b == 0 && t.depthDen.a == 0 && t.depthDen.b == 0;
+  const double Y0 = c.y0 + box.ry0 + 0.5;
+  bs.zConstant = bs.constantDepth ? hn::Set(d, fragmentStored<S>(m, c.x0 + box.rx0 + 0.5, m.p.b * Y0, m.q.b * Y0))
+                                  : hn::Zero(d);
+  bs.pErr = planeError(m.p, c.x0 + c.w, c.y0 + c.h);
+  bs.qErr = planeError(m.q, c.x0 + c.w, c.y0 + c.h);
+  bs.bxFirst = box.rx0 / kBlockSize;
+  bs.bxLast = box.rx1 / kBlockSize;
+  bs.rectBounds = m.affine && bs.pErr < 1e280;
+  SetUpColumns(c, tri, bs);
+  bs.columnReady = 0;
+  for (int i = 0; i < 3; ++i) bs.stepYV[i] = hn::Set(d, double(e[i].stepY()));
+  for (int i = 0; i < 3; ++i) {
+    bs.edgeDx[i] = double(e[i].dx);
+    bs.edgeDxAy[i] = double(e[i].dx * e[i].ay);
+    bs.edgeDxAyBias[i] = double(e[i].dx * e[i].ay + e[i].bias);
+  }
+  if constexpr (kCountBlocks)
+    c.blocksInBoxes += uint64_t(bs.bxLast - bs.bxFirst + 1) * uint64_t(box.ry1 / kBlockSize - box.ry0 / kBlockSize + 1);
+  bs.byFirst = box.ry0 / kBlockSize;
+  bs.byLast = box.ry1 / kBlockSize;
+}
+
+// Classifies block row `by` of the box, a vector of blocks at a time (lane: block column): a
+// block is skipped when behind everything stored there or outside an edge, and is inside an
+// edge when every centre of its part of the box is. Each block's part of the box has four
+// corner centres that bound every edge function on it, and an edge function is linear: its
+// largest and smallest values are at the corners its slopes point to and away from (E grows
+// with x when dy < 0, with y when dx > 0), so two corners decide. Computed in double, exactly:
+// E = dx (py - ay) - dy (px - ax) with snapped coordinates below 2^23 in magnitude is below
+// 2^49; E < bias is then dx (py - ay) - bias < dy (px - ax), integers as well.
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void ClassifyRow(TileCtx<S, M, kIds>& c, const TriangleCtx& tri, const BlockSetup& bs, BlockScratch& bk,
+                            int by) {
+  constexpr bool kGreater = GreaterWins(M);
+  const D d;
+  const size_t N = hn::Lanes(d);
+  const Edge* e = bs.e;
+  const int cy0 = std::max(by * kBlockSize, bs.ry0), cy1 = std::min(by * kBlockSize + kBlockSize - 1, bs.ry1);
+  // (Each term exact in double, as is their difference: the integer the comment above names.)
+  const double top = double(centerFixed(c.y0 + cy0)), bottom = double(centerFixed(c.y0 + cy1));
+  double yLargest[3], ySmallest[3];  // per edge: dx (py - ay) - bias at the rows that bound it
+  double* rowEdge = bk.rowEdge[by];
+  for (int i = 0; i < 3; ++i) {
+    const double dxTop = bs.edgeDx[i] * top, dxBottom = bs.edgeDx[i] * bottom;
+    yLargest[i] = (e[i].dx > 0 ? dxBottom : dxTop) - bs.edgeDxAyBias[i];
+    ySmallest[i] = (e[i].dx > 0 ? dxTop : dxBottom) - bs.edgeDxAyBias[i];
+    rowEdge[i] = dxTop - bs.edgeDxAy[i];
+  }
+  // (Gathered in locals and stored to the row's arrays at the end: or-ed into the arrays, through
+  // memory, they were slower.)
+  uint64_t visit = 0;
+  uint64_t insideEdge[3] = {};
+  for (size_t k = 0; k < size_t(kBlocksX); k += N) {
+    const Mask inBox = hn::MaskFromVec(bs.inBoxV[k / N]);
+    if (hn::AllFalse(d, inBox)) continue;
+    const V far = hn::Load(d, c.s.blockFar + size_t(by * kBlocksX) + k);
+    // The triangle's nearest value in each block: qNear, or the plane's bound over the block's
+    // part of the box when nearer to the truth (farther), which also rejects blocks the
+    // triangle covers only in part.
+    V nearestIn = bs.qNearV;
+    if (bs.rectBounds) {
+      const StoredRangeV r = RectRange<S, M>(tri.m, bs.pErr, bs.pXLow[k / N], bs.pXHigh[k / N], double(c.y0 + cy0) + 0.5,
+                                             double(c.y0 + cy1) + 0.5);
+      hn::Store(r.nearest, d, bk.rectNearest[by] + k);
+      hn::Store(r.farthest, d, bk.rectFarthest[by] + k);
+      nearestIn = Farther<kGreater>(bs.qNearV, r.nearest);
+    }
+    const Mask beaten = kIds ? Nearer<kGreater>(far, nearestIn) : hn::Not(Nearer<kGreater>(nearestIn, far));
+    Mask empty = hn::FirstN(d, 0);
+    uint8_t bits[4][8] = {};
+    for (int i = 0; i < 3; ++i) {
+      empty = hn::Or(empty, hn::Lt(hn::Set(d, yLargest[i]), bs.xLargest[i][k / N]));
+      hn::StoreMaskBits(d, hn::Ge(hn::Set(d, ySmallest[i]), bs.xSmallest[i][k / N]), bits[1 + i]);
+    }
+    hn::StoreMaskBits(d, hn::AndNot(beaten, hn::AndNot(empty, inBox)), bits[0]);
+    visit |= uint64_t(bits[0][0]) << k;
+    for (int i = 0; i < 3; ++i) insideEdge[i] |= uint64_t(bits[1 + i][0]) << k;
+    // (Empty blocks are counted at the end: the boxes' blocks less those culled here and drawn.)
+    if constexpr (kCountBlocks) c.blocksCulledHere += hn::CountTrue(d, hn::And(inBox, beaten));
+  }
+  bk.visit[by] = visit;
+  for (int i = 0; i < 3; ++i) bk.inside[by][i] = insideEdge[i];
+}
+
+// A block row of the box as the visits read it: its part of the box (rows cy0 to cy1) and its
+// classification.
+struct BlockRow {
+  int by, cy0, cy1;
+  const uint64_t* insideEdge;
+  const double* rowEdge;
+  const double* rectNearest;
+  const double* rectFarthest;
+};
+
+// One block a triangle visits: its index, the columns of its part of the box, the edges that
+// cross that part, and how its rows start.
+struct BlockVisit {
+  int bx, b, cx0, cx1;
+  int bxPixel;        // tile-local x of the block's first column
+  unsigned crossing;  // bit i: edge i crosses the block's part of the box (not every centre inside)
+  bool fromClear;     // the rows start from the clear value (key 0) without reading it
+  bool unclamped;     // the rows' depths need no clamp (see VisitBlock)
+};
+
+// A block the triangle covers whole (every pixel centre of the block, in the image), with the
+// triangle's bounds over its corner centres (storedRangeOverRect, or the same bits from
+// classification; every covered value lies within them): skipped when behind everything stored
+// there, or made the triangle's plane in O(1) when in front of it all. That replacement is for
+// a triangle parallel to the image plane over any block (every fragment stores zConstant's
+// bits) and for a sloped one over a block still uniform (cleared, or another plane not yet
+// written out; the resolve's preparation skips the block too); over blocks held pixel by pixel
+// sloped planes were slower (see docs/benchmarks.md). With an affine depth, classification has
+// skipped the beaten blocks already, covered whole or not. Returns whether the block is done.
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE bool TryWholeBlock(TileCtx<S, M, kIds>& c, const TriangleCtx& tri, const BlockSetup& bs,
+                              const BlockRow& row, const BlockVisit& v) {
+  TileScratch& s = c.s;
+  const int b = v.b;
+  const int blockX1 = std::min(v.bx * kBlockSize + kBlockSize - 1, c.w - 1);
+  const int blockY1 = std::min(row.by * kBlockSize + kBlockSize - 1, c.h - 1);
+  if (!(v.cx0 == v.bx * kBlockSize && row.cy0 == row.by * kBlockSize && v.cx1 == blockX1 && row.cy1 == blockY1))
+    return false;
+  StoredRange r{hn::GetLane(bs.zConstant), hn::GetLane(bs.zConstant)};
+  if (!bs.constantDepth)
+    r = bs.rectBounds ? StoredRange{row.rectNearest[v.bx], row.rectFarthest[v.bx]}
+                      : storedRangeOverRect<S, M>(tri.m, bs.pErr, bs.qErr, c.x0 + v.cx0 + 0.5, c.x0 + v.cx1 + 0.5,
+                                                  c.y0 + row.cy0 + 0.5, c.y0 + row.cy1 + 0.5);
+  if (Beaten<M, kIds>(r.nearest, s.blockFar[b])) {
+    if constexpr (kCountBlocks) ++c.count.blocksCulled;
+    return true;
+  }
+  if (!((bs.constantDepth || Lazy(s, b)) && storedNearer<M>(r.farthest, s.blockNear[b]))) return false;
+  const uint64_t cells = uint64_t(v.cx1 - v.cx0 + 1) * uint64_t(row.cy1 - row.cy0 + 1);
+  c.tests += cells;
+  c.writes += cells;
+  ++c.count.blocksWhole;
+  s.blockKey[b] = tri.key;
+  s.blockClear[b] = false;
+  s.blockTriangle[b] = &tri.t;
+  s.tileFarStale |= s.blockFar[b] == s.tileFar;
+  s.blockFar[b] = r.farthest;
+  s.blockNear[b] = r.nearest;
+  if (storedNearer<M>(r.nearest, s.tileNear)) s.tileNear = r.nearest;
+  c.dirtyBlocks &= ~(uint64_t(1) << b);  // its pixel buffers are no longer its values
+  Pump(c.job.pump, kPumpPerWholeBlock);
+  return true;
+}
+
+// A block in a uniform state (Lazy) readied for the triangle's rows. A cleared one is written
+// only where those rows do not reach: they start from the clear value (key 0) without reading
+// it and store every column (MaterializeBlock's values, without writing those rows twice).
+// A plane is written out (MaterializeBlock). Returns whether the rows start from the clear value.
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE bool ReadyLazyBlock(TileCtx<S, M, kIds>& c, const BlockRow& row, const BlockVisit& v) {
+  const D d;
+  const DU du;
+  const size_t N = hn::Lanes(d);
+  TileScratch& s = c.s;
+  const int b = v.b, by = row.by;
+  bool fromClear = false;
+  if (Lazy(s, b)) {
+    if (s.blockClear[b]) {
+      fromClear = true;
+      for (int y = by * kBlockSize; y < (by + 1) * kBlockSize; ++y) {
+        if (y == row.cy0) y = row.cy1 + 1;
+        if (y >= (by + 1) * kBlockSize) break;
+        for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+          const size_t at = size_t(y) * kTileSize + size_t(v.bxPixel) + k;
+          hn::Store(c.clearV, d, s.depth + at);
+          if constexpr (kIds) hn::Store(hn::Zero(du), du, s.triangle + at);
+        }
+      }
+      s.blockClear[b] = false;
+    } else {
+      MaterializeBlock<S, M, kIds>(c.job, c.tf, b, c.reciprocal);
+    }
+  }
+  return fromClear;
+}
+
+// Block column bx's vectors (BlockScratch), computed at the first of its blocks the triangle
+// visits: its columns in the box, a X of both planes (the bits StoredDepth computes) and the
+// edge functions' x terms (integers below 2^49: exact in double, in any order).
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void ReadyColumn(const TileCtx<S, M, kIds>& c, const TriangleCtx& tri, BlockSetup& bs, BlockScratch& bk,
+                            const BlockVisit& v) {
+  const D d;
+  const size_t N = hn::Lanes(d);
+  const int bx = v.bx;
+  if (bs.columnReady >> bx & 1) return;
+  bs.columnReady |= 1u << bx;
+  const Edge* e = bs.e;
+  for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+    const V col = hn::Add(c.lane, hn::Set(d, double(v.bxPixel + int(k))));
+    bk.colIn[bx][k / N] =
+        hn::VecFromMask(d, hn::And(hn::Ge(col, hn::Set(d, double(v.cx0))), hn::Le(col, hn::Set(d, double(v.cx1)))));
+    const V X = hn::Add(col, hn::Set(d, double(c.x0) + 0.5));
+    bk.colPX[bx][k / N] = hn::Mul(hn::Set(d, tri.m.p.a), X);
+    bk.colQX[bx][k / N] = hn::Mul(hn::Set(d, tri.m.q.a), X);
+    for (int i = 0; i < 3; ++i)  // lane j: j stepX - dy (px - ax) at the vector's first pixel px
+      bk.colEdge[i][bx][k / N] =
+          hn::Sub(bs.laneE[i], hn::Set(d, double(e[i].dy * (centerFixed(c.x0 + v.bxPixel + int(k)) - e[i].ax))));
+  }
+}
+
+// A visited block's rows as DrawBlockRows draws them: the crossing edges' functions at the
+// current row (stepped row by row), their steps and biases, packed; the block column's vectors;
+// and what the rows gather: their farthest value and, per vector, the nearest (VisitBlock).
+struct BlockRows {
+  V edgeRow[3][kRowVectors], edgeStep[3], edgeBias[3];
+  int edges;
+  const V* columnIn;
+  const V* pX;
+  const V* qX;
+  V far, nearest[kRowVectors];
+};
+
+// BlockRows for block v: only the crossing edges are tested in its rows (none when the triangle
+// covers the block's part of the box whole).
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void StartBlockRows(const TileCtx<S, M, kIds>& c, const BlockSetup& bs, const BlockScratch& bk,
+                               const BlockRow& row, const BlockVisit& v, BlockRows& r) {
+  const D d;
+  const size_t N = hn::Lanes(d);
+  r.columnIn = bk.colIn[v.bx];
+  r.pX = bk.colPX[v.bx];
+  r.qX = bk.colQX[v.bx];
+  r.edges = 0;
+  for (int i = 0; i < 3; ++i) {
+    if (!(v.crossing >> i & 1)) continue;
+    for (size_t k = 0; k < size_t(kBlockSize); k += N)
+      r.edgeRow[r.edges][k / N] = hn::Add(hn::Set(d, row.rowEdge[i]), bk.colEdge[i][v.bx][k / N]);
+    r.edgeStep[r.edges] = bs.stepYV[i];
+    r.edgeBias[r.edges] = bs.biasV[i];
+    ++r.edges;
+  }
+  r.far = c.nearestV;
+  for (V& near : r.nearest) near = c.farthestV;
+}
+
+// The kernel's inner loop: the rows of block v in the box, kEdges crossing edges tested, the
+// clamp left out when kUnclamped. Every covered pixel's depth is computed and compared (counted
+// as tested): the rows have no branches, a mispredicted one costs more than the division it
+// would save. (No fragment is nearer than the triangle's bound qNear, so testing the stored
+// values against qNear first would reject none that wins or ties.)
+template <int kEdges, bool kUnclamped, DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void DrawBlockRows(TileCtx<S, M, kIds>& c, const TriangleCtx& tri, const BlockSetup& bs,
+                              const BlockRow& row, const BlockVisit& v, BlockRows& r) {
+  constexpr bool kGreater = GreaterWins(M);
   const D d;
   const DU du;
   const hn::RebindToSigned<DU> di;  // keys compared as signed: they are below 2^63
   const size_t N = hn::Lanes(d);
+  TileScratch& s = c.s;
+  const MappedPlanes& m = tri.m;
+  double Y = double(c.y0 + row.cy0) + 0.5;  // the row's centre, stepped (exact: integers + 0.5)
+  for (int y = row.cy0; y <= row.cy1; ++y, Y += 1.0) {
+    const V pY = hn::Set(d, m.p.b * Y);
+    for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+      const size_t at = size_t(y) * kTileSize + size_t(v.bxPixel) + k;
+      const V stored = v.fromClear ? c.clearV : hn::Load(d, s.depth + at);
+      V result = stored;
+      Mask cover = hn::MaskFromVec(r.columnIn[k / N]);
+      for (int i = 0; i < kEdges; ++i) {
+        cover = hn::And(cover, hn::Ge(r.edgeRow[i][k / N], r.edgeBias[i]));
+        r.edgeRow[i][k / N] = hn::Add(r.edgeRow[i][k / N], r.edgeStep[i]);
+      }
+      // Pixel centres X = x + 0.5; depth = P(X, Y) / Q(X, Y) (raster/fragment_depth.hpp).
+      const V z = bs.constantDepth && !kUnclamped ? bs.zConstant
+                                                  : StoredDepthAt<S, kUnclamped>(m, r.pX[k / N], pY, r.qX[k / N], Y);
+      Mask win = hn::And(cover, Nearer<kGreater>(z, stored));
+      if constexpr (kIds) {  // a tie goes to the triangle submitted first
+        const auto old = v.fromClear ? hn::Zero(du) : hn::Load(du, s.triangle + at);
+        const Mask tie =
+            hn::And(hn::Eq(z, stored), hn::RebindMask(d, hn::Lt(hn::BitCast(di, bs.idV), hn::BitCast(di, old))));
+        win = hn::Or(win, hn::And(cover, tie));
+        hn::Store(hn::IfThenElse(hn::RebindMask(du, win), bs.idV, old), du, s.triangle + at);
+      }
+      c.rowTests = CountIn(c.rowTests, cover);
+      c.rowWrites = CountIn(c.rowWrites, win);
+      result = hn::IfThenElse(win, z, stored);
+      hn::Store(result, d, s.depth + at);
+      if constexpr (!kUnclamped) r.nearest[k / N] = NearerOf<kGreater>(r.nearest[k / N], result);
+      r.far = Farther<kGreater>(r.far, result);
+    }
+  }
+}
+
+// DrawBlockRows compiled for each number of crossing edges (0 to 3).
+template <bool kUnclamped, DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void DrawBlockRowsFor(TileCtx<S, M, kIds>& c, const TriangleCtx& tri, const BlockSetup& bs,
+                                 const BlockRow& row, const BlockVisit& v, BlockRows& r) {
+  switch (r.edges) {
+    case 0: DrawBlockRows<0, kUnclamped>(c, tri, bs, row, v, r); break;
+    case 1: DrawBlockRows<1, kUnclamped>(c, tri, bs, row, v, r); break;
+    case 2: DrawBlockRows<2, kUnclamped>(c, tri, bs, row, v, r); break;
+    default: DrawBlockRows<3, kUnclamped>(c, tri, bs, row, v, r); break;
+  }
+}
+
+// After rows that wrote: the block's farthest value (of the rows drawn and those outside the box,
+// which kept theirs) and its and the tile's nearest, moved by the nearest written. The rows
+// gathered that per vector (a lane is one column; only in-image columns count, the others hold
+// the nearest possible value): the nearest written, or a stored value no nearer than blockNear,
+// a bound of every value in the block's image part, so it moves blockNear as the nearest
+// written would. Unclamped rows do not gather it: the triangle's nearest bound over the block's
+// part of the box (rectNearest), a bound of what they wrote as well, moves blockNear instead.
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void UpdateBlockBounds(TileCtx<S, M, kIds>& c, const BlockRow& row, const BlockVisit& v, BlockRows& r) {
+  constexpr bool kGreater = GreaterWins(M);
+  const D d;
+  const size_t N = hn::Lanes(d);
+  TileScratch& s = c.s;
+  const int b = v.b, by = row.by;
+  for (int y = by * kBlockSize; y < (by + 1) * kBlockSize; ++y) {
+    if (y == row.cy0) y = row.cy1 + 1;
+    if (y >= (by + 1) * kBlockSize) break;
+    for (size_t k = 0; k < size_t(kBlockSize); k += N)
+      r.far = Farther<kGreater>(r.far, hn::Load(d, s.depth + size_t(y) * kTileSize + size_t(v.bxPixel) + k));
+  }
+  // The tile's farthest value can only move when the block that held it moved.
+  s.tileFarStale |= s.blockFar[b] == s.tileFar;
+  s.blockFar[b] = FarthestLane<kGreater>(r.far);
+  double written = row.rectNearest[v.bx];
+  if (!v.unclamped) {
+    V near = c.farthestV;
+    for (size_t k = 0; k < size_t(kBlockSize); k += N) {
+      const Mask inImage = hn::Lt(hn::Add(c.lane, hn::Set(d, double(v.bxPixel + int(k)))), hn::Set(d, double(c.w)));
+      near = NearerOf<kGreater>(near, hn::IfThenElse(inImage, r.nearest[k / N], c.farthestV));
+    }
+    written = NearestLane<kGreater>(near);
+  }
+  if (storedNearer<M>(written, s.blockNear[b])) s.blockNear[b] = written;
+  if (storedNearer<M>(written, s.tileNear)) s.tileNear = written;
+}
+
+// Block bx of `row`, which classification left to visit: skipped or replaced in O(1) when the
+// triangle covers it whole (TryWholeBlock); else readied (ReadyLazyBlock, ReadyColumn), its rows
+// drawn (DrawBlockRows) and its bounds moved (UpdateBlockBounds). The rows leave out the clamp
+// when the depth is affine and its bounds over the block's part of the box lie strictly between
+// the stored values of 0 and 1 (clamping changes nothing there: the same bits).
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void VisitBlock(TileCtx<S, M, kIds>& c, const TriangleCtx& tri, BlockSetup& bs, BlockScratch& bk,
+                           const BlockRow& row, int bx) {
+  const DU du;
+  BlockVisit v;
+  v.bx = bx;
+  v.b = row.by * kBlocksX + bx;
+  v.crossing = unsigned(~row.insideEdge[0] >> bx & 1) | unsigned(~row.insideEdge[1] >> bx & 1) << 1 |
+               unsigned(~row.insideEdge[2] >> bx & 1) << 2;
+  const bool full = v.crossing == 0;
+  v.cx0 = std::max(bx * kBlockSize, bs.rx0);
+  v.cx1 = std::min(bx * kBlockSize + kBlockSize - 1, bs.rx1);
+  if constexpr (kCountBlocks) ++(full ? c.count.blocksFull : c.count.blocksPartial);
+  if (full && TryWholeBlock(c, tri, bs, row, v)) return;
+  v.bxPixel = bx * kBlockSize;
+  v.fromClear = ReadyLazyBlock(c, row, v);
+  ReadyColumn(c, tri, bs, bk, v);
+  BlockRows r;
+  StartBlockRows(c, bs, bk, row, v, r);
+  const hn::Vec<DU> writesBefore = c.rowWrites;  // (the rows wrote when a lane's count moved)
+  v.unclamped = bs.rectBounds && !bs.constantDepth && std::min(row.rectNearest[bx], row.rectFarthest[bx]) > 0 &&
+                std::max(row.rectNearest[bx], row.rectFarthest[bx]) < c.tf.storedOne;
+  if (v.unclamped) DrawBlockRowsFor<true>(c, tri, bs, row, v, r);
+  else DrawBlockRowsFor<false>(c, tri, bs, row, v, r);
+  Pump(c.job.pump, kPumpPerBlock);
+  if (!hn::AllTrue(du, hn::Eq(c.rowWrites, writesBefore))) UpdateBlockBounds(c, row, v, r);
+}
+
+// A triangle over more than kSmallPixels centres of the tile, block by block: the box's block
+// rows are all classified first, then visited row by row. A row's classification is a long chain
+// of dependent operations; classified just before its visits, every row would wait on the one
+// before through the visit loop's branches, classified ahead the rows' chains overlap. Only this
+// triangle's visits write the blocks it classifies, each block once, so every block reads the
+// same values classified ahead as just before its visit: the same blocks are drawn.
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void DrawBlocks(TileCtx<S, M, kIds>& c, const TriangleCtx& tri, const Edge (&e)[3], const PixelBox& box) {
+  BlockSetup bs;
+  SetUpBlocks(c, tri, e, box, bs);
+  BlockScratch bk;
+  for (int by = bs.byFirst; by <= bs.byLast; ++by) ClassifyRow(c, tri, bs, bk, by);
+  for (int by = bs.byFirst; by <= bs.byLast; ++by) {
+    const BlockRow row{by,
+                       std::max(by * kBlockSize, bs.ry0),
+                       std::min(by * kBlockSize + kBlockSize - 1, bs.ry1),
+                       bk.inside[by],
+                       bk.rowEdge[by],
+                       bk.rectNearest[by],
+                       bk.rectFarthest[by]};
+    Pump(c.job.pump, kPumpPerBlockRow);
+    for (uint64_t visit = bk.visit[by]; visit; visit &= visit - 1)
+      VisitBlock(c, tri, bs, bk, row, int(hwy::Num0BitsBelowLS1Bit_Nonzero64(visit)));
+  }
+}
+
+// ---- The tile ----
+
+// The tile's end: exact block bounds for the deferred back faces' test after a front pass
+// (tiled.cpp, selectLate), and the counts added to the job's.
+template <DepthStorage S, DepthMapping M, bool kIds>
+HWY_INLINE void FinishTile(TileCtx<S, M, kIds>& c) {
+  const DU du;
+  if (c.job.pass == TileJob::Pass::Front && c.s.state == TileState::Pixels) {
+    if (c.dirtyBlocks) RefreshDirty(c);
+    if (c.s.tileFarStale) RefreshTileFar(c);
+  }
+  if constexpr (kCountBlocks) {
+    c.count.blocksCulled += c.blocksCulledHere;
+    c.count.blocksEmpty = c.blocksInBoxes - c.blocksCulledHere - c.count.blocksFull - c.count.blocksPartial;
+  }
+  c.count.depthTests = c.tests + hn::GetLane(hn::SumOfLanes(du, c.rowTests));
+  c.count.depthWrites = c.writes + hn::GetLane(hn::SumOfLanes(du, c.rowWrites));
+  c.job.counters->add(c.count);
+}
+
+// Draws the tile's triangles (TileJob), nearest first. Each triangle is rejected by the tile's
+// bound, drawn from its coverage list, made the whole tile's plane, drawn pixel by pixel when
+// small, or else block by block. Every step is force-inlined: this is one loop over the
+// triangles, and TileCtx holds its locals.
+template <DepthStorage S, DepthMapping M, bool kIds>
+void RasterizeTileT(const TileJob& job) {
+  const D d;
+  const DU du;
   TileScratch& s = *job.scratch;
-  RasterCounters count;  // added to the job's at the end
-  uint64_t tests = 0, writes = 0;  // the hottest counts, plain locals so they stay in registers
-  // The blocks of the classified triangles' boxes, and those of them culled in classification.
-  uint64_t blocksInBoxes = 0, blocksCulledHere = 0;
-  // The row loop's counts, per lane (summed at the end): CountIn per row instead of popcounts.
-  hn::Vec<DU> rowTests = hn::Zero(du), rowWrites = hn::Zero(du);
-  const Bins& bins = *job.bins;
   const TileFrame tf = MakeTileFrame<S, M>(job);
   const int x0 = tf.x0, y0 = tf.y0, w = tf.w, h = tf.h;
 
@@ -447,556 +1199,63 @@ void RasterizeTileT(const TileJob& job) {
 
   const double n = job.depth.near, f = job.depth.far;
   const bool ortho = job.depth.orthographic;
-  const V nearestV = hn::Set(d, tf.nearestPossible), farthestV = hn::Set(d, tf.farthestPossible);
-  const V clearV = hn::Set(d, tf.clear);
-  const V lane = hn::Iota(d, 0.0);
-  // The tile's pixel centres (corners of the in-image part) for whole-tile tests and bounds.
-  const int64_t cornerX[2] = {centerFixed(x0), centerFixed(x0 + w - 1)};
-  const int64_t cornerY[2] = {centerFixed(y0), centerFixed(y0 + h - 1)};
-  const double rectX[4] = {x0 + 0.5, x0 + w - 0.5, x0 + w - 0.5, x0 + 0.5};
-  const double rectY[4] = {y0 + 0.5, y0 + 0.5, y0 + h - 0.5, y0 + h - 0.5};
-  // Blocks written by the small-triangle path since their farthest values were computed (those
-  // values stay valid bounds meanwhile: writes only bring stored values nearer).
-  uint64_t dirtyBlocks = 0;
-  unsigned sinceRefresh = 0;
-  ReciprocalCache reciprocal;  // mapPlanes' division, once for the tile's triangles that share it
-
-  // The farthest values of the blocks written by the small-triangle path (dirtyBlocks), read
-  // again; and the tile's, the farthest of its blocks'.
-  auto refreshDirty = [&] {
-    for (uint64_t bits = dirtyBlocks; bits; bits &= bits - 1) {
-      const int b = hwy::Num0BitsBelowLS1Bit_Nonzero64(bits);
-      const size_t first = size_t(b / kBlocksX) * kBlockSize * kTileSize + size_t(b % kBlocksX) * kBlockSize;
-      V far = nearestV;
-      for (int y = 0; y < kBlockSize; ++y)
-        for (size_t k = 0; k < size_t(kBlockSize); k += N)
-          far = Farther<kGreater>(far, hn::Load(d, s.depth + first + size_t(y) * kTileSize + k));
-      s.blockFar[b] = FarthestLane<kGreater>(far);
-    }
-    dirtyBlocks = 0;
-    s.tileFarStale = true;
-  };
-  auto refreshTileFar = [&] {
-    V far = nearestV;
-    for (size_t b = 0; b < size_t(kBlocksPerTile); b += N) far = Farther<kGreater>(far, hn::Load(d, s.blockFar + b));
-    s.tileFar = FarthestLane<kGreater>(far);
-    s.tileFarStale = false;
-  };
+  const TileCorners corners{{centerFixed(x0), centerFixed(x0 + w - 1)},
+                            {centerFixed(y0), centerFixed(y0 + h - 1)},
+                            {x0 + 0.5, x0 + w - 0.5, x0 + w - 0.5, x0 + 0.5},
+                            {y0 + 0.5, y0 + 0.5, y0 + h - 0.5, y0 + h - 0.5}};
+  RasterCounters count;
+  ReciprocalCache reciprocal;
+  TileCtx<S, M, kIds> c{.job = job,
+                        .s = s,
+                        .bins = *job.bins,
+                        .tf = tf,
+                        .corners = corners,
+                        .reciprocal = reciprocal,
+                        .count = count,
+                        .x0 = x0,
+                        .y0 = y0,
+                        .w = w,
+                        .h = h,
+                        .nearestV = hn::Set(d, tf.nearestPossible),
+                        .farthestV = hn::Set(d, tf.farthestPossible),
+                        .clearV = hn::Set(d, tf.clear),
+                        .lane = hn::Iota(d, 0.0),
+                        .rowTests = hn::Zero(du),
+                        .rowWrites = hn::Zero(du)};
 
   // The tile's triangles, roughly nearest first (orderTile): any order gives the same image.
   const std::vector<TileEntry>& order =
-      job.pass == TileJob::Pass::Late ? job.order->late : orderTile(bins, job.tile, job.depth, *job.order);
+      job.pass == TileJob::Pass::Late ? job.order->late : orderTile(c.bins, job.tile, job.depth, *job.order);
   for (size_t item = 0, end = order.size(); item < end; ++item) {
-    const SetupTriangle& t = bins.triangle(order[item].key);
-    // The records are scattered over the chunks: fetch ahead those of triangles the tile's
-    // bound does not reject already (nearest first, most hidden ones are rejected unread).
-    // (12 ahead rather than 6 since small triangles come with their coverage listed: sphere
-    // 0.99x the time; 24: no better.)
-    constexpr size_t kAhead = 12;
-    if (item + kAhead < end && !Beaten<M, kIds>(order[item + kAhead].nearest, s.tileFar)) {
-      const SetupTriangle* ahead = &bins.triangle(order[item + kAhead].key);
-      hwy::Prefetch(ahead);
-      hwy::Prefetch(reinterpret_cast<const char*>(ahead) + 64);
-    }
+    const SetupTriangle& t = c.bins.triangle(order[item].key);
+    PrefetchAhead(c, order, item, end);
     const uint64_t key = order[item].key;
-    // Early rejection: the triangle's nearest possible value is farther than the farthest
-    // value stored in the tile (or, without ids, not nearer), so none of its fragments can
-    // win here.
     const double qNear = order[item].nearest;
-    // Blocks small triangles wrote to: their farthest values, again, every 16 triangles (a
-    // stale value is still a valid bound: writes only bring stored values nearer).
-    if (dirtyBlocks && (++sinceRefresh & 15) == 0) refreshDirty();
-    if (s.tileFarStale) refreshTileFar();
+    // Blocks small triangles wrote to: their farthest values, again, every 16 triangles (a stale
+    // value is still a valid bound: writes only bring stored values nearer).
+    if (c.dirtyBlocks && (++c.sinceRefresh & 15) == 0) RefreshDirty(c);
+    if (s.tileFarStale) RefreshTileFar(c);
+    // Early rejection: the triangle's nearest possible value is farther than the farthest value
+    // stored in the tile (or, without ids, not nearer), so none of its fragments can win here.
     if (Beaten<M, kIds>(qNear, s.tileFar)) {
       ++count.culledTiles;
       continue;
     }
     const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, n, f, ortho, reciprocal);
-
-    // The fragment at tile-local pixel (x, y) (pRow = m.p.b * Y, qRow = m.q.b * Y for its row's
-    // centre Y), pixel by pixel in scalar code, with the same operations as the lanes below.
-    auto drawPixel = [&](int x, int y, double pRow, double qRow) {
-      const size_t at = size_t(y) * kTileSize + size_t(x);
-      const double stored = s.depth[at];
-      if (Beaten<M, kIds>(qNear, stored)) return;
-      const double z = fragmentStored<S>(m, double(x) + (double(x0) + 0.5), pRow, qRow);
-      ++tests;
-      if (storedNearer<M>(z, stored) || (kIds && z == stored && key < s.triangle[at])) {
-        ++writes;
-        s.depth[at] = z;
-        if constexpr (kIds) s.triangle[at] = key;
-        const int b = (y / kBlockSize) * kBlocksX + x / kBlockSize;
-        dirtyBlocks |= uint64_t(1) << b;
-        // The nearer value stored without a branch (a data-dependent one per bound: sphere
-        // --depth-only --cull-back 0.988x the time, its frame with ids 0.980x; city, random
-        // and clutter unchanged).
-        s.blockNear[b] = kGreater ? std::max(z, s.blockNear[b]) : std::min(z, s.blockNear[b]);
-        s.tileNear = kGreater ? std::max(z, s.tileNear) : std::min(z, s.tileNear);
-      }
-    };
-    // A small triangle's box in the tile (tile-local, inclusive): whether it is behind everything
-    // stored in the (1 to 4) blocks the box touches (the blocks' farthest values may be stale,
-    // still bounds); if not, those blocks are made ready for drawing pixel by pixel. (The tile
-    // is turned to state Pixels first.)
-    auto smallBeaten = [&](int bx0, int bx1, int by0, int by1) {
-      if (s.state != TileState::Pixels) {  // (the blocks' bounds are kept in state Pixels)
-        Materialize<S, M, kIds>(job, tf);
-        dirtyBlocks = 0;
-      }
-      const int first = (by0 / kBlockSize) * kBlocksX + bx0 / kBlockSize;
-      const int across = bx1 / kBlockSize - bx0 / kBlockSize, down = by1 / kBlockSize - by0 / kBlockSize;
-      if (across <= 1 && down <= 1) {  // (mostly) 1 to 4 blocks: their corners, repeated when fewer
-        const int b[4] = {first, first + across, first + down * kBlocksX, first + down * kBlocksX + across};
-        if (Beaten<M, kIds>(qNear, s.blockFar[b[0]]) & Beaten<M, kIds>(qNear, s.blockFar[b[1]]) &
-            Beaten<M, kIds>(qNear, s.blockFar[b[2]]) & Beaten<M, kIds>(qNear, s.blockFar[b[3]])) {
-          if constexpr (kCountBlocks) ++count.blocksCulled;
-          return true;
-        }
-        for (int i = 0; i < 4; ++i)  // (a block repeated is no longer Lazy the second time)
-          if (Lazy(s, b[i])) MaterializeBlock<S, M, kIds>(job, tf, b[i], reciprocal);
-        return false;
-      }
-      bool beaten = true;
-      for (int by = 0; by <= down; ++by)
-        for (int bx = 0; bx <= across; ++bx) beaten &= Beaten<M, kIds>(qNear, s.blockFar[first + by * kBlocksX + bx]);
-      if (beaten) {
-        if constexpr (kCountBlocks) ++count.blocksCulled;
-        return true;
-      }
-      for (int by = 0; by <= down; ++by)
-        for (int bx = 0; bx <= across; ++bx)
-          if (const int b = first + by * kBlocksX + bx; Lazy(s, b)) MaterializeBlock<S, M, kIds>(job, tf, b, reciprocal);
-      return false;
-    };
-
-    // Triangles whose covered centres set-up listed (SetupTriangle::coverage: a box of at most
-    // 4x4 pixels): no edge functions, only the covered pixels in the tile are visited.
+    const TriangleCtx tri{t, m, key, qNear};
     if (t.coverage) {
-      const int ox = t.minX - x0, oy = t.minY - y0;  // the box's corner, tile-local (maybe outside)
-      const int cx0 = std::max(-ox, 0), cx1 = std::min(w - 1 - ox, kCoverageBox - 1);
-      const int cy0 = std::max(-oy, 0), cy1 = std::min(h - 1 - oy, kCoverageBox - 1);
-      const unsigned columns = ((2u << cx1) - 1) & ~((1u << cx0) - 1);
-      const unsigned rows = ((1u << (kCoverageBox * (cy1 + 1))) - 1) & ~((1u << (kCoverageBox * cy0)) - 1);
-      const unsigned bits = t.coverage & rows & (columns * 0x1111u);
-      if (!bits || smallBeaten(ox + cx0, ox + cx1, oy + cy0, oy + cy1)) continue;
-      for (unsigned left = bits; left; left &= left - 1) {
-        const int bit = int(hwy::Num0BitsBelowLS1Bit_Nonzero32(left));
-        const int y = oy + bit / kCoverageBox;
-        const double Y = double(y0 + y) + 0.5;
-        drawPixel(ox + bit % kCoverageBox, y, m.p.b * Y, m.q.b * Y);
-      }
+      DrawCoverage(c, tri);
       continue;
     }
-
     const Edge e[3] = {makeEdge(t, 0), makeEdge(t, 1), makeEdge(t, 2)};
-
-    // Whole tile: the triangle covers every pixel centre of the tile (its four corner centres;
-    // coverage is convex) and its farthest value is nearer than the nearest stored: it wins
-    // every pixel, and the tile becomes its plane, in O(1) ("lossless z-buffer compression").
-    if (t.minX <= x0 && t.maxX >= x0 + w - 1 && t.minY <= y0 && t.maxY >= y0 + h - 1) {
-      bool covers = true;
-      for (const Edge& edge : e)
-        for (int c = 0; c < 4; ++c) covers &= edge.at(cornerX[c & 1], cornerY[c >> 1]) >= edge.bias;
-      if (covers) {
-        const StoredRange r = storedRange<S, M>(m, rectX, rectY, 4);
-        if (storedNearer<M>(r.farthest, s.tileNear)) {
-          s.state = TileState::Plane;
-          s.plane = &t;
-          s.planeKey = key;
-          s.tileFar = r.farthest;
-          s.tileNear = r.nearest;
-          s.tileFarStale = false;
-          dirtyBlocks = 0;  // the pixel buffers are no longer the tile's values
-          tests += uint64_t(w) * uint64_t(h);
-          writes += uint64_t(w) * uint64_t(h);
-          ++count.tilesWhole;
-          continue;
-        }
-      }
-    }
-    if (s.state != TileState::Pixels) {
-      Materialize<S, M, kIds>(job, tf);
-      dirtyBlocks = 0;
-    }
-
-    // The triangle's pixel box within the tile, tile-local and inclusive.
-    const int rx0 = std::max(t.minX - x0, 0), rx1 = std::min(t.maxX - x0, w - 1);
-    const int ry0 = std::max(t.minY - y0, 0), ry1 = std::min(t.maxY - y0, h - 1);
-    // Small triangles (a box of at most kSmallPixels centres in the tile) without a coverage
-    // list: pixel by pixel.
-    if ((rx1 - rx0 + 1) * (ry1 - ry0 + 1) <= kSmallPixels) {
-      if (smallBeaten(rx0, rx1, ry0, ry1)) continue;
-      int64_t rowE[3];
-      for (int i = 0; i < 3; ++i) rowE[i] = e[i].at(centerFixed(x0 + rx0), centerFixed(y0 + ry0));
-      for (int y = ry0; y <= ry1; ++y) {
-        const double Y = double(y0 + y) + 0.5, pRow = m.p.b * Y, qRow = m.q.b * Y;
-        int64_t E[3] = {rowE[0], rowE[1], rowE[2]};
-        for (int x = rx0; x <= rx1; ++x) {
-          if (E[0] >= e[0].bias && E[1] >= e[1].bias && E[2] >= e[2].bias) drawPixel(x, y, pRow, qRow);
-          for (int i = 0; i < 3; ++i) E[i] += e[i].stepX();
-        }
-        for (int i = 0; i < 3; ++i) rowE[i] += e[i].stepY();
-      }
-      continue;
-    }
-
-    V laneE[3], biasV[3];
-    for (int i = 0; i < 3; ++i) {
-      laneE[i] = hn::Mul(lane, hn::Set(d, double(e[i].stepX())));  // lane j: j * stepX, exact
-      biasV[i] = hn::Set(d, double(e[i].bias));
-    }
-    const V qNearV = hn::Set(d, qNear);
-    const auto idV = hn::Set(du, key);
-    // A triangle parallel to the image plane has both planes constant (a = b = 0): a*X and
-    // b*Y are zeros of a fixed sign, so every pixel computes the same bits as its first one.
-    const bool constantDepth = t.depthNum.a == 0 && t.depthNum.b == 0 && t.depthDen.a == 0 && t.depthDen.b == 0;
-    const double Y0 = y0 + ry0 + 0.5;
-    const V zConstant =
-        constantDepth ? hn::Set(d, fragmentStored<S>(m, x0 + rx0 + 0.5, m.p.b * Y0, m.q.b * Y0)) : hn::Zero(d);
-    // The planes' evaluation errors over the tile, for the bounds of its blocks.
-    const double pErr = planeError(m.p, x0 + w, y0 + h), qErr = planeError(m.q, x0 + w, y0 + h);
-
-    const int bxFirst = rx0 / kBlockSize, bxLast = rx1 / kBlockSize;
-    // An affine mapped depth (q = 1: every perspective z, reversed and inv format) gets its
-    // bounds over each block's part of the box in the classification below, a vector of blocks
-    // at a time (the lanes repeat storedRangeOverRect's operations: the same bits).
-    const bool rectBounds = m.affine && pErr < 1e280;
-    constexpr int kBlockRows = kTileSize / kBlockSize;
-    HWY_ALIGN double rectNearestRows[kBlockRows][kBlocksX], rectFarthestRows[kBlockRows][kBlocksX];
-    // What the classification below needs of each vector of block columns (lane: block column)
-    // that does not depend on the block row, computed once: whether the column meets the box,
-    // P's a X at the corners of the columns' parts of the box that bound it, and the edge
-    // functions' x terms, dy (X - ax), at the corners that make them largest and smallest.
-    constexpr size_t kColumnVectors = size_t(kBlocksX) / hn::MaxLanes(D());
-    static_assert(kColumnVectors >= 1 && size_t(kBlocksX) % hn::MaxLanes(D()) == 0);
-    V inBoxV[kColumnVectors], pXLow[kColumnVectors], pXHigh[kColumnVectors];
-    V xLargest[3][kColumnVectors], xSmallest[3][kColumnVectors];
-    for (size_t k = 0; k < size_t(kBlocksX); k += N) {
-      const V column = hn::Add(lane, hn::Set(d, double(k)));
-      const Mask inBox = hn::And(hn::Ge(column, hn::Set(d, double(bxFirst))), hn::Le(column, hn::Set(d, double(bxLast))));
-      inBoxV[k / N] = hn::VecFromMask(d, inBox);
-      if (hn::AllFalse(d, inBox)) continue;
-      const V firstColumn = hn::Mul(column, hn::Set(d, double(kBlockSize)));
-      const V leftCol = hn::Max(firstColumn, hn::Set(d, double(rx0)));
-      const V rightCol = hn::Min(hn::Add(firstColumn, hn::Set(d, double(kBlockSize - 1))), hn::Set(d, double(rx1)));
-      if (rectBounds) {
-        const V leftPx = hn::Add(leftCol, hn::Set(d, double(x0) + 0.5)), rightPx = hn::Add(rightCol, hn::Set(d, double(x0) + 0.5));
-        pXLow[k / N] = hn::Mul(hn::Set(d, m.p.a), m.p.a >= 0 ? leftPx : rightPx);
-        pXHigh[k / N] = hn::Mul(hn::Set(d, m.p.a), m.p.a >= 0 ? rightPx : leftPx);
-      }
-      const V one = hn::Set(d, double(kSubpixelOne)), half = hn::Set(d, double(kSubpixelOne / 2));
-      const V origin = hn::Set(d, double(x0));
-      const V left = hn::Add(hn::Mul(hn::Add(leftCol, origin), one), half);  // centerFixed, exact
-      const V right = hn::Add(hn::Mul(hn::Add(rightCol, origin), one), half);
-      for (int i = 0; i < 3; ++i) {
-        const V dy = hn::Set(d, double(e[i].dy)), ax = hn::Set(d, double(e[i].ax));
-        xLargest[i][k / N] = hn::Mul(dy, hn::Sub(e[i].dy < 0 ? right : left, ax));
-        xSmallest[i][k / N] = hn::Mul(dy, hn::Sub(e[i].dy < 0 ? left : right, ax));
-      }
-    }
-    // Per block column met (bit bx of columnReady), what its blocks' rows need (see below).
-    constexpr size_t kVectors = size_t(kBlockSize) / hn::MaxLanes(D());  // per block row (1 on AVX-512)
-    static_assert(kVectors >= 1 && size_t(kBlockSize) % hn::MaxLanes(D()) == 0);
-    uint32_t columnReady = 0;
-    V colIn[kBlocksX][kVectors], colPX[kBlocksX][kVectors], colQX[kBlocksX][kVectors], colEdge[3][kBlocksX][kVectors];
-    const V stepYV[3] = {hn::Set(d, double(e[0].stepY())), hn::Set(d, double(e[1].stepY())),
-                         hn::Set(d, double(e[2].stepY()))};
-    // Per edge, in double (exact: |dx| < 2^24, |ay| < 2^23): dx, dx ay, dx ay + bias.
-    double edgeDx[3], edgeDxAy[3], edgeDxAyBias[3];
-    for (int i = 0; i < 3; ++i) {
-      edgeDx[i] = double(e[i].dx);
-      edgeDxAy[i] = double(e[i].dx * e[i].ay);
-      edgeDxAyBias[i] = double(e[i].dx * e[i].ay + e[i].bias);
-    }
-    if constexpr (kCountBlocks)
-      blocksInBoxes += uint64_t(bxLast - bxFirst + 1) * uint64_t(ry1 / kBlockSize - ry0 / kBlockSize + 1);
-    // The box's block rows are all classified first, then visited row by row. A row's
-    // classification is a long chain of dependent operations (its plane bounds alone about
-    // ten), and classified just before its visits every row waited on the one before through
-    // the visit loop's branches; classified ahead, the rows' chains overlap. Only this
-    // triangle's visits write the blocks it classifies, each block once, so every block reads
-    // the same values classified ahead as just before its visit: the same blocks are drawn.
-    const int byFirst = ry0 / kBlockSize, byLast = ry1 / kBlockSize;
-    uint64_t visitRows[kBlockRows], insideRows[kBlockRows][3];
-    double rowEdgeRows[kBlockRows][3];
-    for (int by = byFirst; by <= byLast; ++by) {
-      // The row's blocks classified a vector of blocks at a time (lane: block column): skipped
-      // when behind everything stored there, or outside an edge; in the triangle when inside
-      // all three. Each block's part of the box has four corner centres that bound every edge
-      // function on it, and an edge function is linear: its largest and smallest values are at
-      // the corners its slopes point to and away from (E grows with x when dy < 0, with y when
-      // dx > 0), so two corners decide. Computed in double, exactly: E = dx (py - ay) - dy (px -
-      // ax) with snapped coordinates below 2^23 in magnitude is below 2^49; E < bias is then
-      // dx (py - ay) - bias < dy (px - ax), integers as well.
-      const int cy0 = std::max(by * kBlockSize, ry0), cy1 = std::min(by * kBlockSize + kBlockSize - 1, ry1);
-      // (Each term exact in double, as is their difference: the integer the comment above names.)
-      const double top = double(centerFixed(y0 + cy0)), bottom = double(centerFixed(y0 + cy1));
-      double yLargest[3], ySmallest[3];  // per edge: dx (py - ay) - bias at the rows that bound it
-      double* rowEdge = rowEdgeRows[by];  // per edge: dx (py - ay) at the first row of the blocks' parts of the box
-      for (int i = 0; i < 3; ++i) {
-        const double dxTop = edgeDx[i] * top, dxBottom = edgeDx[i] * bottom;
-        yLargest[i] = (e[i].dx > 0 ? dxBottom : dxTop) - edgeDxAyBias[i];
-        ySmallest[i] = (e[i].dx > 0 ? dxTop : dxBottom) - edgeDxAyBias[i];
-        rowEdge[i] = dxTop - edgeDxAy[i];
-      }
-      // (In locals, stored to the row's arrays at the end: or-ed in the arrays, through memory,
-      // they were 8% of the kernel's time.)
-      uint64_t visit = 0;  // bit bx: the block is drawn
-      uint64_t insideEdge[3] = {};  // bit bx: every centre of the block's part of the box is inside edge i
-      for (size_t k = 0; k < size_t(kBlocksX); k += N) {
-        const Mask inBox = hn::MaskFromVec(inBoxV[k / N]);
-        if (hn::AllFalse(d, inBox)) continue;
-        const V far = hn::Load(d, s.blockFar + size_t(by * kBlocksX) + k);
-        // The triangle's nearest value in each block: qNear, or the plane's bound over the
-        // block's part of the box when nearer to the truth (farther), which also rejects
-        // blocks the triangle covers only in part.
-        V nearestIn = qNearV;
-        if (rectBounds) {
-          const StoredRangeV r = RectRange<S, M>(m, pErr, pXLow[k / N], pXHigh[k / N], double(y0 + cy0) + 0.5,
-                                                 double(y0 + cy1) + 0.5);
-          hn::Store(r.nearest, d, rectNearestRows[by] + k);
-          hn::Store(r.farthest, d, rectFarthestRows[by] + k);
-          nearestIn = Farther<kGreater>(qNearV, r.nearest);
-        }
-        const Mask beaten = kIds ? Nearer<kGreater>(far, nearestIn) : hn::Not(Nearer<kGreater>(nearestIn, far));
-        Mask empty = hn::FirstN(d, 0);
-        uint8_t bits[4][8] = {};
-        for (int i = 0; i < 3; ++i) {
-          empty = hn::Or(empty, hn::Lt(hn::Set(d, yLargest[i]), xLargest[i][k / N]));
-          hn::StoreMaskBits(d, hn::Ge(hn::Set(d, ySmallest[i]), xSmallest[i][k / N]), bits[1 + i]);
-        }
-        hn::StoreMaskBits(d, hn::AndNot(beaten, hn::AndNot(empty, inBox)), bits[0]);
-        visit |= uint64_t(bits[0][0]) << k;
-        for (int i = 0; i < 3; ++i) insideEdge[i] |= uint64_t(bits[1 + i][0]) << k;
-        // (Empty blocks are counted at the end: the boxes' blocks less those culled here and drawn.)
-        if constexpr (kCountBlocks) blocksCulledHere += hn::CountTrue(d, hn::And(inBox, beaten));
-      }
-      visitRows[by] = visit;
-      for (int i = 0; i < 3; ++i) insideRows[by][i] = insideEdge[i];
-    }
-    for (int by = byFirst; by <= byLast; ++by) {
-      const int cy0 = std::max(by * kBlockSize, ry0), cy1 = std::min(by * kBlockSize + kBlockSize - 1, ry1);
-      const uint64_t* insideEdge = insideRows[by];
-      const double* rowEdge = rowEdgeRows[by];
-      const double* rectNearest = rectNearestRows[by];
-      const double* rectFarthest = rectFarthestRows[by];
-      Pump(job.pump, kPumpPerBlockRow);
-      uint64_t visit = visitRows[by];
-      for (; visit; visit &= visit - 1) {
-        const int bx = int(hwy::Num0BitsBelowLS1Bit_Nonzero64(visit));
-        const int b = by * kBlocksX + bx;
-        // The edges that cross the block's part of the box (not every centre inside them): only
-        // those are tested in its rows; none when the triangle covers that part whole.
-        const unsigned crossing = unsigned(~insideEdge[0] >> bx & 1) | unsigned(~insideEdge[1] >> bx & 1) << 1 |
-                                  unsigned(~insideEdge[2] >> bx & 1) << 2;
-        const bool full = crossing == 0;
-        const int cx0 = std::max(bx * kBlockSize, rx0), cx1 = std::min(bx * kBlockSize + kBlockSize - 1, rx1);
-        if constexpr (kCountBlocks) ++(full ? count.blocksFull : count.blocksPartial);
-        // A block the triangle covers whole (every pixel centre of the block, in the image):
-        // the triangle's bounds over its corner centres (storedRangeOverRect, or the same bits
-        // from the classification; every covered value lies within them). Behind everything
-        // stored there: the block is skipped (with an affine depth, already classified so,
-        // covered whole or not: random --occlusion --cull back 1.11-1.15x). In front of it
-        // all: the block becomes the triangle's plane, in O(1) — parallel to the image plane
-        // (every fragment stores zConstant's bits) over any block; sloped, over a block still
-        // uniform (cleared, or another plane not yet written out; the resolve's preparation
-        // skips the block too). Over blocks held pixel by pixel, sloped planes measured slower:
-        // with ids the city, depth only the cubes' depth image (0.97x, though the city's
-        // occlusion buffer gained 1.04x). Depth only over uniform blocks, as with ids: city
-        // occlusion with back faces culled 1.08–1.18x, cubes' depth image 1.09x (ResolveDepthT
-        // maps a block's planes once per run of lanes).
-        const int blockX1 = std::min(bx * kBlockSize + kBlockSize - 1, w - 1);
-        const int blockY1 = std::min(by * kBlockSize + kBlockSize - 1, h - 1);
-        if (full && cx0 == bx * kBlockSize && cy0 == by * kBlockSize && cx1 == blockX1 && cy1 == blockY1) {
-          StoredRange r{hn::GetLane(zConstant), hn::GetLane(zConstant)};
-          if (!constantDepth)
-            r = rectBounds ? StoredRange{rectNearest[bx], rectFarthest[bx]}
-                           : storedRangeOverRect<S, M>(m, pErr, qErr, x0 + cx0 + 0.5, x0 + cx1 + 0.5, y0 + cy0 + 0.5,
-                                                       y0 + cy1 + 0.5);
-          if (Beaten<M, kIds>(r.nearest, s.blockFar[b])) {
-            if constexpr (kCountBlocks) ++count.blocksCulled;
-            continue;
-          }
-          if ((constantDepth || Lazy(s, b)) && storedNearer<M>(r.farthest, s.blockNear[b])) {
-            const uint64_t cells = uint64_t(cx1 - cx0 + 1) * uint64_t(cy1 - cy0 + 1);
-            tests += cells;
-            writes += cells;
-            ++count.blocksWhole;
-            s.blockKey[b] = key;
-            s.blockClear[b] = false;
-            s.blockTriangle[b] = &t;
-            s.tileFarStale |= s.blockFar[b] == s.tileFar;
-            s.blockFar[b] = r.farthest;
-            s.blockNear[b] = r.nearest;
-            if (storedNearer<M>(r.nearest, s.tileNear)) s.tileNear = r.nearest;
-            dirtyBlocks &= ~(uint64_t(1) << b);  // its pixel buffers are no longer its values
-            Pump(job.pump, kPumpPerWholeBlock);
-            continue;
-          }
-        }
-        // A cleared block (wholly in the image) is written only where the triangle's rows do
-        // not reach: the rows drawn below start from the clear value (key 0) without reading it,
-        // and store every column — MaterializeBlock's values, without writing those rows twice
-        // (in one process against materializing first: random --occlusion --cull back 0.990x
-        // the time, 0.996x on one thread; city 0.986x, its frame 0.994x; sphere 0.987x; cubes
-        // frame 0.994x; layers 0.997x).
-        const int bxPixel = bx * kBlockSize;  // tile-local x of the block's first column
-        bool fromClear = false;
-        if (Lazy(s, b)) {
-          if (s.blockClear[b]) {
-            fromClear = true;
-            for (int y = by * kBlockSize; y < (by + 1) * kBlockSize; ++y) {
-              if (y == cy0) y = cy1 + 1;
-              if (y >= (by + 1) * kBlockSize) break;
-              for (size_t k = 0; k < size_t(kBlockSize); k += N) {
-                const size_t at = size_t(y) * kTileSize + size_t(bxPixel) + k;
-                hn::Store(clearV, d, s.depth + at);
-                if constexpr (kIds) hn::Store(hn::Zero(du), du, s.triangle + at);
-              }
-            }
-            s.blockClear[b] = false;
-          } else {
-            MaterializeBlock<S, M, kIds>(job, tf, b, reciprocal);
-          }
-        }
-
-        // Per vector of the block's row (k / N): its columns in the box, a X of both planes
-        // (the same bits StoredDepth computes) — the block column's, computed at its first
-        // block — and the edge functions at its pixels in the current row, stepped row by row
-        // (integers below 2^49: exact in double, in any order).
-        if (!(columnReady >> bx & 1)) {
-          columnReady |= 1u << bx;
-          for (size_t k = 0; k < size_t(kBlockSize); k += N) {
-            const V col = hn::Add(lane, hn::Set(d, double(bxPixel + int(k))));
-            colIn[bx][k / N] = hn::VecFromMask(d, hn::And(hn::Ge(col, hn::Set(d, double(cx0))), hn::Le(col, hn::Set(d, double(cx1)))));
-            const V X = hn::Add(col, hn::Set(d, double(x0) + 0.5));
-            colPX[bx][k / N] = hn::Mul(hn::Set(d, m.p.a), X);
-            colQX[bx][k / N] = hn::Mul(hn::Set(d, m.q.a), X);
-            for (int i = 0; i < 3; ++i)  // lane j: j stepX - dy (px - ax) at the vector's first pixel px
-              colEdge[i][bx][k / N] =
-                  hn::Sub(laneE[i], hn::Set(d, double(e[i].dy * (centerFixed(x0 + bxPixel + int(k)) - e[i].ax))));
-          }
-        }
-        const V* columnIn = colIn[bx];
-        const V* pX = colPX[bx];
-        const V* qX = colQX[bx];
-        // The crossing edges' functions at the block's first row, their steps and biases, packed.
-        V edgeRow[3][kVectors], edgeStep[3], edgeBias[3];
-        int edges = 0;
-        for (int i = 0; i < 3; ++i) {
-          if (!(crossing >> i & 1)) continue;
-          for (size_t k = 0; k < size_t(kBlockSize); k += N)
-            edgeRow[edges][k / N] = hn::Add(hn::Set(d, rowEdge[i]), colEdge[i][bx][k / N]);
-          edgeStep[edges] = stepYV[i];
-          edgeBias[edges] = biasV[i];
-          ++edges;
-        }
-        // The block's farthest value after this triangle, gathered from the rows it visits.
-        // The nearest value of the rows' in-image columns, per vector of a row (a lane is one
-        // column): the nearest written, or a stored value no nearer than blockNear (a bound of
-        // every value stored in the block's image part), so it moves blockNear as the nearest
-        // written would. (Columns outside the image hold the nearest possible value.) Rows
-        // without the clamp do not gather it: the triangle's nearest bound over the block's part
-        // of the box (rectNearest) moves blockNear instead, a bound of what it wrote as well
-        // (random --occlusion --cull back 1.03x; the same planes on the peer scenes).
-        V far = nearestV, nearest[kVectors];
-        for (V& v : nearest) v = farthestV;
-        const hn::Vec<DU> writesBefore = rowWrites;  // (the rows wrote when a lane's count moved)
-        // The rows, compiled for each number of crossing edges (0 to 3), and without the clamp
-        // when the depth is affine and its bounds over the block's part of the box lie strictly
-        // between the stored values of 0 and 1 (clamping changes nothing there: the same bits).
-        // Random --occlusion --cull back 1.05x for the edges, 1.03x more for the clamp.
-        const bool unclamped = rectBounds && !constantDepth && std::min(rectNearest[bx], rectFarthest[bx]) > 0 &&
-                               std::max(rectNearest[bx], rectFarthest[bx]) < tf.storedOne;
-        auto drawRows = [&](auto edgeCount, auto unclampedTag) HSR_ALWAYS_INLINE {
-          constexpr int kEdges = decltype(edgeCount)::value;
-          constexpr bool kUnclamped = decltype(unclampedTag)::value;
-          double Y = double(y0 + cy0) + 0.5;  // the row's centre, stepped (exact: integers + 0.5)
-          for (int y = cy0; y <= cy1; ++y, Y += 1.0) {
-            const V pY = hn::Set(d, m.p.b * Y);
-            for (size_t k = 0; k < size_t(kBlockSize); k += N) {
-              const size_t at = size_t(y) * kTileSize + size_t(bxPixel) + k;
-              const V stored = fromClear ? clearV : hn::Load(d, s.depth + at);
-              V result = stored;
-              Mask cover = hn::MaskFromVec(columnIn[k / N]);
-              for (int i = 0; i < kEdges; ++i) {
-                cover = hn::And(cover, hn::Ge(edgeRow[i][k / N], edgeBias[i]));
-                edgeRow[i][k / N] = hn::Add(edgeRow[i][k / N], edgeStep[i]);
-              }
-              // Every covered pixel's depth is computed and compared (counted as tested): the
-              // row has no branches, a mispredicted one costs more than the division it would
-              // save. (No fragment is nearer than the triangle's bound qNear, so a first test of
-              // the stored values against qNear rejects none that wins or ties: it only counted
-              // fewer tests, at two more operations a row; without it random and city
-              // --occlusion --cull back 1.02x.)
-              // Pixel centres X = x + 0.5; depth = P(X, Y) / Q(X, Y) (raster/fragment_depth.hpp).
-              const V z = constantDepth && !kUnclamped ? zConstant
-                                                       : StoredDepthAt<S, kUnclamped>(m, pX[k / N], pY, qX[k / N], Y);
-              Mask win = hn::And(cover, Nearer<kGreater>(z, stored));
-              if constexpr (kIds) {  // a tie goes to the triangle submitted first
-                const auto old = fromClear ? hn::Zero(du) : hn::Load(du, s.triangle + at);
-                const Mask tie = hn::And(hn::Eq(z, stored), hn::RebindMask(d, hn::Lt(hn::BitCast(di, idV), hn::BitCast(di, old))));
-                win = hn::Or(win, hn::And(cover, tie));
-                hn::Store(hn::IfThenElse(hn::RebindMask(du, win), idV, old), du, s.triangle + at);
-              }
-              rowTests = CountIn(rowTests, cover);
-              rowWrites = CountIn(rowWrites, win);
-              result = hn::IfThenElse(win, z, stored);
-              hn::Store(result, d, s.depth + at);
-              if constexpr (!kUnclamped) nearest[k / N] = NearerOf<kGreater>(nearest[k / N], result);
-              far = Farther<kGreater>(far, result);
-            }
-          }
-        };
-        auto drawRowsFor = [&](auto unclampedTag) HSR_ALWAYS_INLINE {
-          switch (edges) {
-            case 0: drawRows(std::integral_constant<int, 0>(), unclampedTag); break;
-            case 1: drawRows(std::integral_constant<int, 1>(), unclampedTag); break;
-            case 2: drawRows(std::integral_constant<int, 2>(), unclampedTag); break;
-            default: drawRows(std::integral_constant<int, 3>(), unclampedTag); break;
-          }
-        };
-        if (unclamped) drawRowsFor(std::true_type());
-        else drawRowsFor(std::false_type());
-        Pump(job.pump, kPumpPerBlock);
-        if (!hn::AllTrue(du, hn::Eq(rowWrites, writesBefore))) {
-          // The block's rows outside the triangle's box kept their values.
-          for (int y = by * kBlockSize; y < (by + 1) * kBlockSize; ++y) {
-            if (y == cy0) y = cy1 + 1;
-            if (y >= (by + 1) * kBlockSize) break;
-            for (size_t k = 0; k < size_t(kBlockSize); k += N)
-              far = Farther<kGreater>(far, hn::Load(d, s.depth + size_t(y) * kTileSize + size_t(bxPixel) + k));
-          }
-          // The tile's farthest value can only move when the block that held it moved.
-          s.tileFarStale |= s.blockFar[b] == s.tileFar;
-          s.blockFar[b] = FarthestLane<kGreater>(far);
-          double written = rectNearest[bx];
-          if (!unclamped) {
-            V near = farthestV;
-            for (size_t k = 0; k < size_t(kBlockSize); k += N) {
-              const Mask inImage = hn::Lt(hn::Add(lane, hn::Set(d, double(bxPixel + int(k)))), hn::Set(d, double(w)));
-              near = NearerOf<kGreater>(near, hn::IfThenElse(inImage, nearest[k / N], farthestV));
-            }
-            written = NearestLane<kGreater>(near);
-          }
-          if (storedNearer<M>(written, s.blockNear[b])) s.blockNear[b] = written;
-          if (storedNearer<M>(written, s.tileNear)) s.tileNear = written;
-        }
-      }
-    }
+    if (TryWholeTile(c, tri, e)) continue;
+    EnsurePixels(c);
+    const PixelBox box{std::max(t.minX - x0, 0), std::min(t.maxX - x0, w - 1), std::max(t.minY - y0, 0),
+                       std::min(t.maxY - y0, h - 1)};
+    if ((box.rx1 - box.rx0 + 1) * (box.ry1 - box.ry0 + 1) <= kSmallPixels) DrawSmall(c, tri, e, box);
+    else DrawBlocks(c, tri, e, box);
   }
-  if (job.pass == TileJob::Pass::Front && s.state == TileState::Pixels) {
-    // Exact block bounds for the deferred back faces' test (tiled.cpp, selectLate).
-    if (dirtyBlocks) refreshDirty();
-    if (s.tileFarStale) refreshTileFar();
-  }
-  if constexpr (kCountBlocks) {
-    count.blocksCulled += blocksCulledHere;
-    count.blocksEmpty = blocksInBoxes - blocksCulledHere - count.blocksFull - count.blocksPartial;
-  }
-  count.depthTests = tests + hn::GetLane(hn::SumOfLanes(du, rowTests));
-  count.depthWrites = writes + hn::GetLane(hn::SumOfLanes(du, rowWrites));
-  job.counters->add(count);
+  FinishTile(c);
 }
 
 // unmapDepth<M>(stored / scale) (core/depth_map.hpp, eyeDepthOfStored) lane by lane.
@@ -1054,13 +1313,12 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
   // Row by row in two passes: the stored values of the row's lanes (by the tile's or block's
   // state), then their eye depths. Apart, the second pass is a short loop of independent
   // divisions that the processor overlaps; in one loop with the state's branches and the
-  // plane's arithmetic, a division's latency showed in every vector (depth image, in one process:
-  // layers 0.871, city 0.920, cubes 0.933 of the time).
+  // plane's arithmetic, a division's latency shows in every vector (see docs/benchmarks.md).
   HWY_ALIGN double stored[kTileSize];
   for (int y = rowBegin; y < std::min(rowEnd, tf.h); ++y) {
     const double Y = double(tf.y0 + y) + 0.5;
     for (size_t k = 0; k < size_t(tf.w); k += N) {
-      const int b = (y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize;  // lanes within one block
+      const int b = (y / kBlockSize) * kBlocksX + int(k) / kBlockSize;  // lanes within one block
       const V X = hn::Iota(d, double(tf.x0 + int(k)) + 0.5);
       V q;
       if (s.state == TileState::Plane) q = StoredDepth<S>(m, X, Y);
@@ -1180,7 +1438,6 @@ HWY_INLINE void ResolveFour(const Bins& bins, uint64_t* keys, uint64_t* cells, d
 // the background where nothing was drawn.
 template <bool kColor>
 void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
-  constexpr int kBlocksX = kTileSize / kBlockSize;
   const D d;
   const DU du;
   const hn::Rebind<float, D> df;
@@ -1217,10 +1474,9 @@ void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
         const size_t at = size_t(y) * kTileSize + size_t(bx) + k;
         uint64_t* keys = s.triangle + at;
         uint64_t* cells = reinterpret_cast<uint64_t*>(s.depth + at);
-        // A row of one triangle, or of two (a key 0 is the background): a vector per triangle
-        // (cubes 1.04x, random 1.06x, sphere 1.03x); rows of more (small triangles) with their
-        // records transposed (ResolveFour; without AVX2, lane by lane). (On the sphere, up to
-        // three triangles a vector each, broadcast, was 0.91x, slower.)
+        // A row of one triangle, or of two (a key 0 is the background): a vector per triangle;
+        // rows of more (small triangles) with their records transposed (ResolveFour; without
+        // AVX2, lane by lane). (Three triangles a vector each, broadcast, was slower.)
         const auto keyV = hn::Load(du, keys);
         const uint64_t first = keys[0];
         const auto isFirst = hn::Eq(keyV, hn::Set(du, first));
@@ -1245,8 +1501,8 @@ void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
           continue;
         }
 #if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
-        // Rows of more, four cells at a time rather than lane by lane (sphere frame 0.96-0.99x
-        // the time; its PrepareResolveT 7.6% -> 6.7% of the profile, now bound by the division).
+        // Rows of more, four cells at a time rather than lane by lane (then bound by the
+        // division).
         for (size_t g = 0; g < N; g += 4)
           ResolveFour<kColor>(bins, keys + g, cells + g, double(x0 + bx + int(k + g)) + 0.5, Y, emptyDepth,
                               emptyTriangle, [&](size_t j, uint64_t key) {
@@ -1318,9 +1574,8 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
   if (s.state == TileState::Plane) {
     // One triangle's plane over the whole tile: its ids and colour are the same in every row
     // (written once); each row's eye depths in a loop of nothing else, whose divisions overlap
-    // (as in ResolveDepthT), with EyeDepthAt's operations. Against the general loop below
-    // (in one process, depth, face ids and colour): layers 0.85, city 0.91–0.92 of the time,
-    // cubes and sphere the same.
+    // (as in ResolveDepthT), with EyeDepthAt's operations: faster than the general loop below
+    // (see docs/benchmarks.md).
     const SetupTriangle& t = bins.triangle(s.planeKey);
     const auto face = hn::Set(du32, Bits32(int32_t(t.face))), triangle = hn::Set(du32, Bits32(int32_t(t.triangle)));
     const auto color = hn::Set(du32, kColor ? colorOf(s.planeKey, t) : 0);
@@ -1359,7 +1614,7 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
       uint32_t* faceOut = rows[1] + k;
       uint32_t* triangleOut = rows[2] + k;
       uint32_t* colorOut = rows[3] + k;
-      const int b = (y / kBlockSize) * (kTileSize / kBlockSize) + int(k) / kBlockSize;  // (lanes within one block)
+      const int b = (y / kBlockSize) * kBlocksX + int(k) / kBlockSize;  // (lanes within one block)
       const uint64_t key = s.blockKey[b];  // (0 when the block is cleared or held pixel by pixel)
       if (!key && !s.blockClear[b]) {  // the cells prepareResolve filled
         hn::Vec<decltype(du32)> eye, face, triangle, color;
@@ -1444,7 +1699,7 @@ void RasterizeTile(const TileJob& job) {
 // the format's 32 bits (keptStored inverts it), streamed: a block's 64 values are 4 whole lines.
 template <DepthStorage S, DepthMapping M>
 void StoreTileT(const TileScratch& from, KeptTile& to) {
-  constexpr bool kGreater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
+  constexpr bool kGreater = GreaterWins(M);
   const D d;
   const size_t N = hn::Lanes(d);
   const hn::Rebind<int32_t, D> di32;
@@ -1475,7 +1730,6 @@ void StoreTileT(const TileScratch& from, KeptTile& to) {
   stream(to.blockKey, from.blockKey);
   stream(to.blockTriangle, from.blockTriangle);
   std::memcpy(to.blockClear, from.blockClear, sizeof(from.blockClear));
-  constexpr int kBlocksX = kTileSize / kBlockSize;
   HWY_ALIGN uint32_t block[kBlockSize * kBlockSize];  // staged, then streamed whole
   for (int b = 0; b < kBlocksPerTile; ++b) {
     if (from.blockKey[b] != 0 || from.blockClear[b]) continue;  // uniform: its pixel values are stale

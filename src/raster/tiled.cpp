@@ -137,7 +137,7 @@ HWY_INLINE void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, 
     for (int tx = tx0; tx <= tx1; ++tx) {
       // Each edge at the tile's column where E is largest (the right one when dy < 0): a few
       // multiplications, not narrowTilesToEdge's 64-bit divisions (the same tiles; its test
-      // checks it against this per-tile evaluation). City binning 0.62 -> 0.57 ms.
+      // checks it against this per-tile evaluation).
       const int left = std::max<int>(tx * kTileSize, t.minX), right = std::min<int>(tx * kTileSize + kTileSize - 1, t.maxX);
       bool touches = true;
       for (int i = 0; i < 3; ++i)
@@ -151,8 +151,8 @@ HWY_INLINE void binTriangle(const SetupTriangle& t, uint32_t index, int tilesX, 
 }
 
 // Whether the circle inscribed in triangle t (radius 2 area / perimeter, in subpixel units) is
-// narrower than `radius`. (Coordinates below 2^24 in magnitude: no square overflows; std::hypot's
-// care took 2.6% of random's occlusion buffer.)
+// narrower than `radius`. (Coordinates below 2^24 in magnitude: no square overflows, so
+// std::hypot's costly care is not needed.)
 bool inscribedCircleBelow(const SetupTriangle& t, double radius) {
   const double ux = double(t.x[1]) - t.x[0], uy = double(t.y[1]) - t.y[0];
   const double vx = double(t.x[2]) - t.x[0], vy = double(t.y[2]) - t.y[0];
@@ -175,9 +175,8 @@ bool coverBounds(const SetupTriangles& tris, const DepthSetup& depth, int width,
   const int side = std::min({kTileSize, width, height});
   // A triangle that covers a side x side square of pixel centres holds its inscribed circle, of
   // radius (side - 1) / 2 pixels: a triangle whose own inscribed circle is smaller covers no
-  // such tile. (10,000 random triangles at 1920x1080: 3,061 of
-  // the 4,999 front faces have a box of 64 x 64 pixels or more, 625 of them a circle that wide;
-  // this function was 2.5% of the time of their occlusion buffer, to cull 2 pairs.)
+  // such tile. (Most triangles with a box that large fail this test cheaply; see
+  // docs/benchmarks.md for what the whole function costs.)
   const double minRadius = (side - 1) * 0.5 * double(kSubpixelOne) * (1 - 1e-9);  // (a margin for rounding)
   for (const SetupTriangle& t : tris) {
     if (std::min(t.maxX - t.minX, t.maxY - t.minY) + 1 < side || inscribedCircleBelow(t, minRadius)) continue;
@@ -443,14 +442,13 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, const DepthS
   });
   if (in.size() < 2 || !finite || !(hi > lo) || !std::isfinite(hi - lo)) return in;  // (unsorted: any order is right)
   // Many small triangles (a dense mesh's, like the sphere's: about 1,000 a tile, boxes of 2 to 4
-  // pixels), left in submission order (see kUnsortedArea). Against sorting them: sphere frame
-  // 0.965x the time, its --depth-only --cull-back 0.948x; city, cubes, random, layers unchanged
-  // (their tiles have few triangles, or large ones).
+  // pixels), left in submission order (see kUnsortedArea): sorting them costs more than the
+  // culling it buys (see docs/benchmarks.md).
   if (in.size() >= kUnsortedEntries && area <= kUnsortedArea) return in;
   // Counting sort into buckets of equal width in eye depth between the extreme bounds, nearest
   // bucket first. (Equal widths in the stored value put most of a perspective scene in a bucket
-  // or two: the z, reversed and inv mappings crowd the distance together. By eye depth, city
-  // --occlusion --cull back 1.63x, its full frame 1.30x on AVX2.) When the tile's farthest
+  // or two: the z, reversed and inv mappings crowd the distance together; see
+  // docs/benchmarks.md.) When the tile's farthest
   // bound is less than 1.25 times as far as its nearest, the stored value is nearly affine in
   // eye depth over that range, and the buckets stay in it: no division per triangle (the
   // sphere's tiles, 1000 triangles each at about one distance).

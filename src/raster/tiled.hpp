@@ -56,8 +56,8 @@ struct BackgroundPump;  // (below: streamed background written between the kerne
 
 inline constexpr bool kCountBlocks = HSR_RASTER_COUNTERS;
 
-/// Tile edge in pixels (a multiple of kBlockSize). Measured at 1920x1080: 32 and 64 within
-/// noise of each other, 128 slower on the million-triangle sphere; 64 has fewer tiles to manage.
+/// Tile edge in pixels (a multiple of kBlockSize). 32 and 64 perform alike, 128 is slower on
+/// dense meshes (see docs/benchmarks.md); 64 has fewer tiles to manage.
 inline constexpr int kTileSize = 64;
 /// The kernel's block: classified empty/partial/full by its corners, one SIMD row per line.
 inline constexpr int kBlockSize = 8;
@@ -304,12 +304,10 @@ struct TileOrder {
 /// kUnsortedArea pixels in all is not sorted (orderTile): see there.
 inline constexpr size_t kUnsortedEntries = 64;
 inline constexpr uint64_t kUnsortedArea = 3 * uint64_t(kTileSize) * uint64_t(kTileSize);
-/// orderTile's buckets (at most 256: a bucket's index is a byte). With 32, surfaces less than a
-/// thirty-second of a tile's depth range apart shared a bucket and were visited in submission
-/// order: the 64 stacked layers, farthest submitted first, wrote 1.15 times the pixels they cover.
-/// With 128 (in one process, Intel Xeon with AVX-512, 2 threads): layers frame 0.935x the time,
-/// depth only 0.968x; city 0.982x and 0.993x; random 0.987x and 0.989x; clutter frame 0.979x;
-/// cubes the same. (256: about the same; 4 per triangle of the tile, at least 32: less gain.)
+/// orderTile's buckets (at most 256: a bucket's index is a byte). Surfaces closer together than
+/// 1/kOrderBuckets of a tile's depth range share a bucket and are visited in submission order,
+/// so too few buckets let stacked layers submitted farthest first overwrite pixels; 128 is where
+/// more stop paying (see docs/benchmarks.md).
 inline constexpr int kOrderBuckets = 128;
 
 /// The triangles binned to `tile`, roughly nearest first (a stable bucket sort of their nearest
@@ -359,8 +357,8 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, const DepthS
 /// bound, to every tile the box overlaps (Bins::clusters). A tile tests it like a deferred face;
 /// where it may show, the cluster is set up (once per frame, by the first worker to need it:
 /// ChunkBins::setUp) and each of its triangles in the tile is tested on its own nearest bound and
-/// drawn in the Late pass. Needs Bins::sceneTriangles too. On the million-triangle sphere, 7,922
-/// clusters (507,008 triangles) are deferred; the front end then sets up half the triangles.
+/// drawn in the Late pass. Needs Bins::sceneTriangles too. On a dense closed mesh about half the
+/// triangles are then never set up.
 void prepareBins(Bins& bins, int width, int height, size_t chunkCount);
 void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const DepthSetup* cullFor = nullptr);
 
@@ -382,8 +380,8 @@ void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids
 /// gets — depth[i] becomes (float eye depth, int32 face
 /// id), triangle[i] (int32 triangle id, Rgba8 colour) — so that the resolve, which writes the
 /// frame band by band across several tiles, copies instead of looking triangles up. (Looked up
-/// at resolve, the records had left the cache: 40% of the resolve's samples were that load on
-/// the million-triangle sphere.) Depth and keys are gone afterwards (TileScratch::resolved).
+/// at resolve, the records have left the cache.) Depth and keys are gone afterwards
+/// (TileScratch::resolved).
 /// `shader` and `background`: colour, for outputs with FrameOutputs::Color only.
 void prepareResolve(const Bins& bins, int tile, FrameOutputs outputs, const TriangleShader* shader, Rgba8 background,
                     TileScratch& scratch, BackgroundPump* pump = nullptr);
@@ -395,9 +393,9 @@ void prepareResolve(const Bins& bins, int tile, FrameOutputs outputs, const Tria
 /// the stored value; the background (-1, +inf, `background`) where nothing was drawn. The frame's
 /// buffers that `outputs` does not ask for are not touched. Only the tile's rows [rowBegin,
 /// rowEnd) (tile-local): a caller resolving several tiles writes the frame band by band across
-/// them — row-major frame buffers written one 64x64 tile at a time with ordinary stores were
-/// 3-6x slower to write (64 rows x 4 buffers of scattered 256-byte pieces defeat the hardware
-/// prefetchers and TLB), measured on this project's 2-core VM. With ids, the tile must have been through
+/// them — row-major frame buffers written one 64x64 tile at a time with ordinary stores are
+/// much slower to write (64 rows x 4 buffers of scattered 256-byte pieces defeat the hardware
+/// prefetchers and TLB; see docs/benchmarks.md). With ids, the tile must have been through
 /// prepareResolve() (std::logic_error otherwise). Returns the number of covered pixels.
 /// The frame's whole cache lines are written with streaming stores: a thread that called
 /// resolveTile calls finishResolves() before another thread reads the frame.
@@ -453,9 +451,8 @@ struct BackgroundPump {
 };
 /// Lines the kernel streams from its pump after each block it makes a triangle's plane whole,
 /// each block it draws row by row, each block row it classifies, and each block prepareResolve
-/// converts. Measured in that order (cubes frame, 2 threads, one process, B/A against no pump):
-/// 1, 4, 2, 0 lines 0.987; 8, 32, 16, 0: 0.917; 16, 32, 16, 0: 0.906–0.943; 16, 48, 16, 0:
-/// 0.925–0.937; 16, 48, 16, 32: 0.909–0.917; 32, 128, 64, 0: 0.989 (bursts again).
+/// converts: enough to hide the stores behind the kernel's work, few enough not to come in
+/// bursts (see docs/benchmarks.md).
 inline constexpr uint32_t kPumpPerBlock = 48, kPumpPerWholeBlock = 16, kPumpPerBlockRow = 16,
                           kPumpPerPreparedBlock = 32;
 /// Streams every line the pump has left.
