@@ -562,7 +562,7 @@ TEST(Raster, BatchedNearestBoundsEqualScalarOnEveryInstructionSet) {
         std::vector<SetupTriangle> batch(tri.size());
         std::vector<double> nearest(tri.size());
         batch.resize(setupBatch(vertices.data(), vertex, tri.data(), face.data(), tri.size(), cam, Cull::None, counts,
-                                batch.data(), &depth, nearest.data()));
+                                batch.data(), {.depth = &depth, .nearest = nearest.data()}));
         ASSERT_GT(batch.size(), 500u);
         const std::string what = std::string(hwy::TargetName(target)) + " " + name + (ortho ? " ortho" : "");
         for (size_t i = 0; i < batch.size(); ++i) {

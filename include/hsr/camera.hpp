@@ -2,7 +2,7 @@
 // resolveCamera() turns it, with an image size and the scene bounds, into a Camera that every
 // algorithm uses: a world-to-camera pose and a projection to pixel coordinates, in double.
 //
-// Conventions (../shared/CONVENTIONS.md): camera space here uses OpenCV axes — x right, y down,
+// Conventions (docs/conventions.md): camera space here uses OpenCV axes — x right, y down,
 // z forward — so eye depth d is simply camera-space z. Pixel (x, y) has its centre at
 // (x + 0.5, y + 0.5), y = 0 is the top row. An OpenGL camera (lookAt + perspective) maps to the
 // same pixels as OpenGL's viewport transform of its clip coordinates (with y flipped to put row 0
@@ -34,7 +34,7 @@ struct CameraSpec {
   std::optional<double> near, far;
 };
 
-/// Parses a camera JSON (either style, CONVENTIONS.md). Throws InputError "file: problem".
+/// Parses a camera JSON (either style, docs/conventions.md). Throws InputError "file: problem".
 CameraSpec parseCameraJson(const std::string& text, const std::string& sourceName);
 /// Writes a camera spec as JSON (the same format parseCameraJson reads).
 std::string cameraSpecToJson(const CameraSpec& spec);

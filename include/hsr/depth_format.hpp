@@ -4,7 +4,7 @@
 //  mapping   value                          clear  nearer wins   notes
 //  z         OpenGL window z, far = 1       1      less          perspective: f(d-n)/((f-n)d)
 //  reversed  1 - z                          0      greater       reversed-Z; with f32 the default
-//  inv       n / d  (1/w scaled, as in 004) 0      greater       0 is infinitely far
+//  inv       n / d  (1/w scaled, as in the Java chapter) 0      greater       0 is infinitely far
 //  linear    (d - n) / (f - n)              1      less          eye depth, equal steps
 //
 // Integer storage keeps round(value * (2^bits - 1)); f32 keeps the value rounded to float.

@@ -46,9 +46,8 @@ namespace detail {
 /// Storage of `bytes` for a buffer, aligned to a 64-byte cache line. A buffer of at least
 /// kHugePageBytes gets whole 2 MiB pages, aligned to them, and asks Linux to back them with
 /// transparent huge pages (madvise; only advice: where the system does not offer them, the
-/// memory is the same as without). A 1920x1080 frame's buffers then need 4-5 TLB entries each
-/// instead of ~2,000: the four cubes' frame took 0.92-0.95x the time, the layers' 0.88-0.94x,
-/// the sphere's 0.98-1.01x (docs/benchmarks.md, thirty-fourth session). Throws std::bad_alloc.
+/// memory is the same as without): a 1920x1080 frame's buffers then need a few TLB entries each
+/// instead of thousands (docs/benchmarks.md). Throws std::bad_alloc.
 void* allocateBuffer(size_t bytes);
 /// Frees what allocateBuffer(bytes) returned (the same `bytes`).
 void freeBuffer(void* p, size_t bytes) noexcept;

@@ -2,7 +2,7 @@
 // exact. Occluders are rasterized by the tiled z-buffer's kernel (depth only) into 64x64 screen
 // tiles that keep their depth in tile form and are not turned into an image unless asked: a tile
 // that one triangle covers in front of all it held is stored as that triangle's depth plane in
-// O(1) (document 002's lossless z-buffer compression), and each tile and 8x8 block keeps bounds
+// O(1) (the Ukrainian paper's lossless z-buffer compression), and each tile and 8x8 block keeps bounds
 // of its stored depth, so queries and later triangles skip whole tiles and blocks.
 //
 // Exact: the stored values are those the z-buffer stores (raster/fragment_depth.hpp), so
@@ -48,7 +48,7 @@ class OcclusionBuffer {
 
   /// Rasterizes the triangles of `scene` (finalized) seen by `camera` into the buffer, which is
   /// sized to the camera's image and cleared first. The scene need not outlive the call. Returns
-  /// the frame's statistics (CONVENTIONS.md keys; covered_pixels is counted by depthImage()).
+  /// the frame's statistics (docs/conventions.md keys; covered_pixels is counted by depthImage()).
   /// Throws InputError for bad options, like render(). Buffers are reused from call to call.
   const Stats& render(const Scene& scene, const Camera& camera, const OcclusionOptions& options = {});
 

@@ -1,7 +1,7 @@
 // The public entry point: render a scene with a camera and one of the visibility algorithms
 // into a Frame (visibility buffer + statistics), and verify it against the exact reference.
 //
-// Conventions, stated once (details in docs/conventions.md and ../shared/CONVENTIONS.md):
+// Conventions, stated once (details in docs/conventions.md):
 //  - world space right-handed; camera space x right, y down, z forward; eye depth = camera z;
 //  - pixel (x, y) centre at (x + .5, y + .5), row 0 at the top; a triangle covers a pixel when
 //    the centre is inside, centres on an edge follow the top-left rule;

@@ -13,7 +13,7 @@
 namespace hsr {
 
 /// One triangle of the triangulation. `face` is the index of the polygon it came from
-/// (CONVENTIONS.md: the face index is the polygon's position in file order).
+/// (docs/conventions.md: the face index is the polygon's position in file order).
 struct Triangle {
   uint32_t v[3];
   uint32_t face;

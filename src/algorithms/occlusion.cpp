@@ -21,7 +21,7 @@ namespace hsr {
 
 namespace {
 
-// Mesh culling (README, Performance; Greene's object-space culling, document 002): a scene of at
+// Mesh culling (README, Performance; Greene's object-space culling, the Ukrainian paper): a scene of at
 // least kMinMeshes meshes, seen in perspective, is drawn in up to kMaxPasses passes, nearest
 // meshes first; before each pass after the first, every mesh not drawn yet whose box and nearest
 // bound (meshBound) lie behind what the kept tiles already hold is dropped whole, before set-up.

@@ -87,7 +87,7 @@ int prepareTilePass(TiledState& state, int threads, std::vector<uint32_t>* touch
 template <class TilesOf>
 void assignUnits(TiledState& state, int workers, size_t units, TilesOf&& tilesOf);
 
-/// The statistics every tiled pass reports (CONVENTIONS.md keys): the front end's counts and the
+/// The statistics every tiled pass reports (docs/conventions.md keys): the front end's counts and the
 /// tile pass's tests, writes and triangle-tile pairs culled (with `bins`: also those culled when binned). covered_pixels, colour writes,
 /// memory and times are the caller's.
 void tiledStats(Stats& st, const FrontEndOutput& fe, const tiled::Bins* bins, const tiled::RasterCounters& counters);

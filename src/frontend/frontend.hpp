@@ -304,14 +304,7 @@ struct SetupBatchOptions {
 };
 size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
                   const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
-                  SetupTriangle* out, const SetupBatchOptions& options);
-/// The same with only a depth setup and its nearest bounds (or neither).
-inline size_t setupBatch(const ProjectedVertex* projected, const uint32_t* const* vertex, const uint32_t* triIndex,
-                         const uint32_t* face, size_t count, const Camera& cam, Cull cull, FrontEndCounters& counters,
-                         SetupTriangle* out, const DepthSetup* depth = nullptr, double* nearest = nullptr) {
-  return setupBatch(projected, vertex, triIndex, face, count, cam, cull, counters, out,
-                    SetupBatchOptions{.depth = depth, .nearest = nearest});
-}
+                  SetupTriangle* out, const SetupBatchOptions& options = {});
 
 /// Scene triangles [first, end).
 struct TriangleRange {

@@ -1,6 +1,6 @@
 // Array files of io.hpp: NumPy .npy (depth and face ids), PFM and raw float32 depth, and the
 // writeDepth dispatch by extension (EXR is in exr.cpp). Read by NumPy scripts and image tools
-// that compare hsr with other renderers; layouts per CONVENTIONS.md "Output files".
+// that compare hsr with other renderers; layouts per docs/conventions.md "Output files".
 #include "io/encode.hpp"
 
 #include <algorithm>

@@ -1,6 +1,6 @@
 // The PNG writers of io.hpp: shaded colour, face-id images (24-bit id + 1, or int32 .npy) and
 // the grey depth picture, encoded in memory with stb_image_write and written atomically.
-// Called by the `hsr` command line after a render; formats per CONVENTIONS.md "Output files".
+// Called by the `hsr` command line after a render; formats per docs/conventions.md "Output files".
 #include "io/encode.hpp"
 
 #include <stb/stb_image_write.h>

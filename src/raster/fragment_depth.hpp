@@ -5,9 +5,9 @@
 // A fragment at pixel centre (X, Y) stores quantize(clamp(P(X, Y) / Q(X, Y), 0, 1)), where P
 // and Q are affine functions of the pixel position built once per triangle from its eye-depth
 // planes d = N / D (frontend.hpp: N = d/w, D = 1/w) and the depth mapping (mapPlanes below):
-// the mapping of document 002 written as one ratio, so a fragment costs one division, not the
+// the mapping of the Ukrainian paper written as one ratio, so a fragment costs one division, not the
 // two of mapDepth(N / D). Mathematically the same value; the rounding differs by a few ulps.
-// (The scanline rasterizer of 003 steps eye depth along a span instead and stores
+// (The scanline rasterizer of the lecture notes steps eye depth along a span instead and stores
 // quantize(mapDepth(d)): close to, not bit-identical with, this.)
 //
 // Bounds (storedRange): P / Q with Q > 0 is a linear-fractional function, monotone along every

@@ -1,8 +1,8 @@
-// The scanline rasterizer of document 003: for each pixel row, intersect the three edges with
+// The scanline rasterizer of the lecture notes: for each pixel row, intersect the three edges with
 // the row to get the span [xl, xr] of covered pixel centres (exact integer arithmetic, same
 // edge functions and top-left rule as the half-space rasterizer, hence identical coverage),
 // then walk the span stepping depth by the plane equation: z(i+1) = z(i) + dz/dx along the
-// span and z(j+1) = z(j) + dz/dy between rows (003 writes these -A/C and -B/C). Depth here is
+// span and z(j+1) = z(j) + dz/dy between rows (the lecture notes write these -A/C and -B/C). Depth here is
 // the pair (d/w, 1/w), both affine in screen space; eye depth d = their ratio.
 // Calls visit(x, y, eyeDepth) in row order. Consumed by the algorithms (--raster scanline).
 #pragma once

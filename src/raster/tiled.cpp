@@ -513,7 +513,7 @@ void setUpCluster(const Bins& bins, size_t c, size_t k, const DepthSetup& depth,
   const uint32_t* v[3] = {vertex[0], vertex[1], vertex[2]};
   // Set up straight into the slots (the survivors in order, from `slot` on).
   const size_t n = setupBatch(bins.projected, v, tri, face, kClusterTriangles, *bins.camera, Cull::None, ignored, out,
-                              &depth, cl.slotNearest.data() + slot);
+                              {.depth = &depth, .nearest = cl.slotNearest.data() + slot});
   for (size_t i = 0; i < n; ++i) {
     out[i].frontFacing = false, out[i].color = Rgba8{};
     cl.slotBox[slot + i] = {out[i].minX, out[i].minY, out[i].maxX, out[i].maxY};

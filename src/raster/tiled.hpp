@@ -13,7 +13,7 @@
 // raster/fragment_depth.hpp + zbuffer.cpp), so face ids and stored depths are bit-identical to
 // it for any thread count and instruction set.
 //
-// Uniform states ("lossless z-buffer compression", document 002): a tile starts cleared without
+// Uniform states ("lossless z-buffer compression", the Ukrainian paper): a tile starts cleared without
 // touching its buffers, and a triangle covering all of it in front of everything stored there
 // makes it that triangle's plane in O(1) (TileState); likewise an 8x8 block for a triangle
 // parallel to the image plane (TileScratch::blockKey), and each block of a plane tile that a
@@ -321,7 +321,7 @@ inline constexpr int kOrderBuckets = 128;
 /// per pixel, the nearest fragment and, among equals, the first submitted: the image the z-buffer
 /// draws in submission order, bit for bit. Nearest first, the tiles' and blocks' farthest depths
 /// reject most hidden triangles before their pixels are visited (the front-to-back + z-buffer
-/// combination of documents 000/001, per tile).
+/// combination of the KTH report's and thesis's, per tile).
 const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, const DepthSetup& depth, TileOrder& order);
 
 /// Binning, in two steps: prepareBins() sizes the bins for a width x height image and
@@ -339,7 +339,7 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, const DepthS
 /// chunk, so the bins do not depend on the thread count. On stacked screen-filling layers this
 /// drops nearly every pair before it is sorted, ordered or visited.
 ///
-/// Deferred back faces (runFrontEnd with deferBackFaces; document 000's back-face culling, made
+/// Deferred back faces (runFrontEnd with deferBackFaces; the KTH report's back-face culling, made
 /// exact): on a closed mesh a back face lies behind the front faces over it, but culling it
 /// outright is not exact (silhouettes, open meshes, intersecting geometry). Those whose pixel box
 /// lies in one tile are kept out of the set-up records (FrontEndChunk::deferred, 40 bytes each)

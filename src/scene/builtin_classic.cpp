@@ -1,5 +1,5 @@
-// Built-in scenes after the figures of the source documents: the four cubes of 001, the
-// painter's-algorithm failures of 000 (Fig. 2/3 midpoint sort, Fig. 4 cycle), interpenetrating
+// Built-in scenes after the figures of the source documents: the four cubes of the KTH thesis, the
+// painter's-algorithm failures of the KTH report (Fig. 2/3 midpoint sort, Fig. 4 cycle), interpenetrating
 // polygons and a z-fighting pair. Small, fixed scenes; called by makeBuiltin() (builtin.cpp).
 //
 // Coordinates use only +, *, / and sqrt, and rotations take exact (cos, sin) pairs such as
@@ -14,7 +14,7 @@
 
 namespace hsr::builtin {
 
-// 001's first comparison scene: 24 quads, four cubes of different sizes and turns at different
+// The KTH thesis's first comparison scene: 24 quads, four cubes of different sizes and turns at different
 // depths, so that nearer cubes hide parts of farther ones.
 Scene makeCubes(const Args&) {
   struct Cube {
@@ -39,7 +39,7 @@ Scene makeCubes(const Args&) {
   return scene;
 }
 
-// 000 Fig. 2/3: a long bar whose depth rises along its length. Its centroid lies behind the
+// The KTH report, Fig. 2/3: a long bar whose depth rises along its length. Its centroid lies behind the
 // square, but its near end passes in front of it; sorted by midpoint, the square is drawn last
 // and wrongly covers the bar. Only a per-pixel test (z-buffer) or splitting draws it right.
 Scene makePainterMidpoint(const Args&) {
@@ -58,7 +58,7 @@ Scene makePainterMidpoint(const Args&) {
   return scene;
 }
 
-// 000 Fig. 4: three bars along the sides of a triangle, each rising in depth from its start to
+// The KTH report, Fig. 4: three bars along the sides of a triangle, each rising in depth from its start to
 // its end. Where bar i ends it crosses the start of bar i+1, high above it: 0 over 1, 1 over 2,
 // 2 over 0. No two bars intersect, yet no drawing order of whole polygons is right.
 Scene makePainterCycle(const Args&) {

@@ -1,4 +1,4 @@
-// Built-in parametric scenes for measurement: random intersecting triangles (000, 001), a
+// Built-in parametric scenes for measurement: random intersecting triangles (KTH report, KTH thesis), a
 // geodesic sphere of about a million triangles, stacked screen-filling layers (overdraw) and a
 // city seen from the street (occlusion). Called by makeBuiltin() (builtin.cpp).
 //
