@@ -586,17 +586,32 @@ Json algorithmsJson() {
   return out;
 }
 
+// `text` broken into lines of at most `width` characters, each after `indent`.
+std::string wrapped(const std::string& text, const std::string& indent, size_t width = 96) {
+  std::string out, line;
+  std::istringstream words(text);
+  for (std::string word; words >> word;) {
+    if (!line.empty() && indent.size() + line.size() + 1 + word.size() > width) {
+      out += indent + line + "\n";
+      line.clear();
+    }
+    line += (line.empty() ? "" : " ") + word;
+  }
+  if (!line.empty()) out += indent + line + "\n";
+  return out;
+}
+
 void printAlgorithms() {
   for (const hsr::AlgorithmInfo& a : hsr::algorithms()) {
     fmt::print("{}\n  {}\n  source: {}\n  guarantee: {}\n", a.name, a.summary, a.source, a.guarantee.describe());
     if (!a.guarantee.condition.empty() && a.guarantee.kind == hsr::Guarantee::Kind::Exact)
-      fmt::print("    ({})\n", a.guarantee.condition);
+      fmt::print("{}", wrapped("(" + a.guarantee.condition + ")", "    "));
     if (a.params.empty()) fmt::print("  parameters: none\n");
     for (const hsr::ParamSpec& p : a.params) {
       std::string values = p.type == hsr::ParamType::Choice ? fmt::format("{}", fmt::join(p.choices, "|"))
                            : p.type == hsr::ParamType::Bool ? "on|off"
                                                             : fmt::format("{} in [{}, {}]", hsr::paramTypeName(p.type), p.min, p.max);
-      fmt::print("  --param {}={}  (default {})\n      {}\n", p.name, values, p.defaultValue, p.help);
+      fmt::print("  --param {}={}  (default {})\n{}", p.name, values, p.defaultValue, wrapped(p.help, "      "));
     }
     fmt::print("\n");
   }

@@ -44,7 +44,7 @@ AlgorithmInfo zbufferAlgorithm() {
                "submission order; scanline: the same on the lecture notes' scanline rasterizer, depth stepped "
                "along each span"}};
   a.guarantee.kind = Guarantee::Kind::Exact;
-  a.guarantee.condition = "up to the depth format's precision (z-fighting is counted as ambiguous)";
+  a.guarantee.condition = "up to the depth format's precision: z-fighting is counted as ambiguous";
   a.run = zbuffer;
   return a;
 }
