@@ -33,8 +33,8 @@ class FragmentWriter {
   using T = DepthT<S>;
 
   FragmentWriter(std::span<const SetupTriangle> tris, const Camera& cam, const RenderOptions& opt,
-                 const TriangleShader& shade, Frame& frame)
-      : tris_(tris), cam_(cam), opt_(opt), shade_(shade), frame_(frame),
+                 const TriangleShader& shade, Frame& frame, const DerivedScene* derived)
+      : tris_(tris), cam_(cam), opt_(opt), shade_(shade), frame_(frame), derived_(derived),
         keepWinner_(R != WriteRule::DepthTest || opt.outputs != FrameOutputs::DepthOnly),
         color_(has(opt.outputs, FrameOutputs::Color)),
         clear_(quantizeDepth<S>(opt.depthFormat.clearValue())) {
@@ -81,11 +81,11 @@ class FragmentWriter {
         } else {
           if (!winner_[idx]) continue;
           const SetupTriangle& t = tris_[winner_[idx] - 1];
-          if (faceIds) frame_.faceId[idx] = int32_t(t.face);
-          if (triangleIds) frame_.triangleId[idx] = int32_t(t.triangle);
+          if (faceIds) frame_.faceId[idx] = int32_t(derived_ ? derived_->face[t.face] : t.face);
+          if (triangleIds) frame_.triangleId[idx] = int32_t(derived_ ? derived_->triangle[t.triangle] : t.triangle);
           frame_.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
           // (Blend composited its colours as it drew; the others show the last written.)
-          if (color_ && R != WriteRule::Blend) frame_.color[idx] = triangleColor(t, shade_);
+          if (color_ && R != WriteRule::Blend) frame_.color[idx] = colorOf(t);
         }
         ++n.covered;
       }
@@ -110,9 +110,14 @@ class FragmentWriter {
     if (keepWinner_) winner_[idx] = i + 1;
     if (color_) {
       ++n.colorWrites;
-      if constexpr (R == WriteRule::Blend) frame_.color[idx] = over(triangleColor(tris_[i], shade_), frame_.color[idx]);
+      if constexpr (R == WriteRule::Blend) frame_.color[idx] = over(colorOf(tris_[i]), frame_.color[idx]);
     }
     if (!frame_.writes.empty()) ++frame_.writes[idx];
+  }
+
+  // The shaded colour of a set-up triangle: its original face's, when it is derived geometry.
+  Rgba8 colorOf(const SetupTriangle& t) const {
+    return derived_ ? shade_(derived_->triangle[t.triangle]) : triangleColor(t, shade_);
   }
 
   std::span<const SetupTriangle> tris_;
@@ -120,6 +125,7 @@ class FragmentWriter {
   const RenderOptions& opt_;
   const TriangleShader& shade_;
   Frame& frame_;
+  const DerivedScene* derived_;
   const bool keepWinner_, color_;
   const T clear_;
   std::vector<T> depth_;          // DepthTest: the stored values
@@ -141,8 +147,8 @@ std::vector<std::vector<uint32_t>> binTriangles(std::span<const SetupTriangle> t
 // tile by tile on the pool (each tile's pixels are its own; counters summed in tile order).
 template <WriteRule R, DepthStorage S, DepthMapping M>
 uint64_t drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const Camera& cam, const RenderOptions& opt,
-                  const TriangleShader& shade, Frame& frame, DrawCounters& counters) {
-  FragmentWriter<R, S, M> writer(tris, cam, opt, shade, frame);
+                  const TriangleShader& shade, Frame& frame, DrawCounters& counters, const DerivedScene* derived) {
+  FragmentWriter<R, S, M> writer(tris, cam, opt, shade, frame, derived);
   const int threads = resolveThreads(opt.threads);
   if (raster != DrawRaster::Binned) {
     for (uint32_t i = 0; i < tris.size(); ++i) writer.draw(i, raster, 0, 0, cam.width - 1, cam.height - 1, counters);
@@ -200,17 +206,18 @@ DrawRaster drawRasterOf(const AlgorithmParams& params) {
 }
 
 uint64_t drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawRaster raster, const Camera& camera,
-                     const RenderOptions& options, const TriangleShader& shade, Frame& frame, DrawCounters& counters) {
+                     const RenderOptions& options, const TriangleShader& shade, Frame& frame, DrawCounters& counters,
+                     const DerivedScene* derived) {
   frame.clear(options.background, resolveThreads(options.threads));
   auto withRule = [&]<WriteRule R>() {
     uint64_t bytes = 0;
     if constexpr (R == WriteRule::DepthTest)
       visitDepthFormat(options.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
-        bytes = drawWith<R, S, M>(triangles, raster, camera, options, shade, frame, counters);
+        bytes = drawWith<R, S, M>(triangles, raster, camera, options, shade, frame, counters, derived);
       });
     else  // no depth buffer: one instance
       bytes = drawWith<R, DepthStorage::F32, DepthMapping::Reversed>(triangles, raster, camera, options, shade, frame,
-                                                                     counters);
+                                                                     counters, derived);
     return bytes;
   };
   switch (rule) {
@@ -223,12 +230,12 @@ uint64_t drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, D
 }
 
 void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& options, WriteRule rule,
-               DrawRaster raster, const OrderFn& order, Frame& frame) {
+               DrawRaster raster, const OrderFn& order, Frame& frame, const DerivedScene* derived) {
   Timer timer;
   Stats& st = frame.stats;
-  const TriangleShader shade(scene, camera, options.shading);
+  const TriangleShader shade(scene, camera, options.shading);  // (the original scene's faces)
   FrontEndOutput fe;
-  runFrontEnd(scene, camera, options, fe);
+  runFrontEnd(derived ? *derived->scene : scene, camera, options, fe);
   std::vector<SetupTriangle> triangles = fe.flatten();
   st.addTime("frontend", timer.lap());
   if (order) {
@@ -236,7 +243,7 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
     st.addTime("order", timer.lap());
   }
   DrawCounters n;
-  const uint64_t bufferBytes = drawOrdered(triangles, rule, raster, camera, options, shade, frame, n);
+  const uint64_t bufferBytes = drawOrdered(triangles, rule, raster, camera, options, shade, frame, n, derived);
   st.addTime("raster", timer.lap());
 
   if (rule == WriteRule::DepthTest) st.depth_format = options.depthFormat.name();

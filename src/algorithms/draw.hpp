@@ -51,20 +51,32 @@ struct DrawCounters {
   }
 };
 
+/// Geometry an algorithm made from the scene (a BSP tree's or Newell's split polygons): drawn
+/// instead of the scene's own faces, each of its faces and triangles mapped back to the scene's.
+/// Face ids, triangle ids and colours in the frame are then the scene's: a fragment shows its
+/// original face, shaded as that face is.
+struct DerivedScene {
+  const Scene* scene = nullptr;          // the geometry drawn (finalized)
+  std::vector<uint32_t> face;            // per face of `scene`: the original face
+  std::vector<uint32_t> triangle;        // per triangle of `scene`: a triangle of the original face
+};
+
 /// Draws `triangles` in their order into `frame` (sized by render(); cleared here) under `rule`
-/// and adds to `counters`; Frame::writes, when sized, gets each pixel's written fragments.
+/// and adds to `counters`; Frame::writes, when sized, gets each pixel's written fragments. With
+/// `derived`, the triangles are its scene's, and ids and colours are mapped back (DerivedScene).
 /// Returns the bytes of the buffers it used.
 uint64_t drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawRaster raster, const Camera& camera,
-                     const RenderOptions& options, const TriangleShader& shade, Frame& frame, DrawCounters& counters);
+                     const RenderOptions& options, const TriangleShader& shade, Frame& frame, DrawCounters& counters,
+                     const DerivedScene* derived = nullptr);
 
 /// Puts the set-up triangles (submission order on entry) into drawing order.
 using OrderFn = std::function<void(std::vector<SetupTriangle>& triangles)>;
 
-/// A whole frame: the front end sets up the scene's triangles in submission order, `order` (if
-/// any) reorders them, drawOrdered draws them; the statistics common to every algorithm are
-/// filled (front-end counts, counters, memory, times "frontend", "order", "raster"), and the
-/// details "rasterizer" and "write_rule".
+/// A whole frame: the front end sets up the scene's triangles (or, with `derived`, its scene's)
+/// in submission order, `order` (if any) reorders them, drawOrdered draws them; the statistics
+/// common to every algorithm are filled (front-end counts, counters, memory, times "frontend",
+/// "order", "raster"), and the details "rasterizer" and "write_rule".
 void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& options, WriteRule rule,
-               DrawRaster raster, const OrderFn& order, Frame& frame);
+               DrawRaster raster, const OrderFn& order, Frame& frame, const DerivedScene* derived = nullptr);
 
 }  // namespace hsr::algo
