@@ -24,6 +24,7 @@
 #include <map>
 #include <memory>
 #include <sstream>
+#include <tuple>
 
 #ifndef HSR_VERSION
 #define HSR_VERSION "0.1.0"  // normally set by CMake from project(VERSION)
@@ -568,6 +569,20 @@ Runner setupScenes(CLI::App& cmd) {
   };
 }
 
+// The guarantees an algorithm gives with other values of its choice parameters, where they
+// differ from its default one: (parameter, value, guarantee).
+std::vector<std::tuple<std::string, std::string, std::string>> otherGuarantees(const hsr::AlgorithmInfo& a) {
+  std::vector<std::tuple<std::string, std::string, std::string>> out;
+  if (!a.guaranteeFor) return out;
+  const std::string byDefault = a.guaranteeWith(hsr::resolveParams(a, {})).describe();
+  for (const hsr::ParamSpec& p : a.params)
+    for (const std::string& value : p.choices) {
+      const std::string g = a.guaranteeWith(hsr::resolveParams(a, {{p.name, value}})).describe();
+      if (g != byDefault) out.emplace_back(p.name, value, g);
+    }
+  return out;
+}
+
 // `hsr algorithms`: the registry, as text or JSON.
 Json algorithmsJson() {
   Json out = Json::array();
@@ -580,8 +595,12 @@ Json algorithmsJson() {
       entry["help"] = p.help;
       params.push_back(entry);
     }
+    Json others = Json::array();
+    for (const auto& [param, value, guarantee] : otherGuarantees(a))
+      others.push_back({{"param", param}, {"value", value}, {"guarantee", guarantee}});
     out.push_back({{"name", a.name}, {"summary", a.summary}, {"source", a.source},
-                   {"guarantee", a.guarantee.describe()}, {"params", params}});
+                   {"guarantee", a.guaranteeWith(hsr::resolveParams(a, {})).describe()}, {"params", params},
+                   {"guarantee_with", others}});
   }
   return out;
 }
@@ -603,9 +622,13 @@ std::string wrapped(const std::string& text, const std::string& indent, size_t w
 
 void printAlgorithms() {
   for (const hsr::AlgorithmInfo& a : hsr::algorithms()) {
-    fmt::print("{}\n  {}\n  source: {}\n  guarantee: {}\n", a.name, a.summary, a.source, a.guarantee.describe());
-    if (!a.guarantee.condition.empty() && a.guarantee.kind == hsr::Guarantee::Kind::Exact)
-      fmt::print("{}", wrapped("(" + a.guarantee.condition + ")", "    "));
+    const hsr::Guarantee byDefault = a.guaranteeWith(hsr::resolveParams(a, {}));
+    fmt::print("{}\n  {}\n  source: {}\n{}", a.name, a.summary, a.source,
+               wrapped("guarantee: " + byDefault.describe(), "  "));
+    if (!byDefault.condition.empty() && byDefault.kind == hsr::Guarantee::Kind::Exact)
+      fmt::print("{}", wrapped("(" + byDefault.condition + ")", "    "));
+    for (const auto& [param, value, guarantee] : otherGuarantees(a))
+      fmt::print("{}", wrapped("with " + param + "=" + value + ": " + guarantee, "    "));
     if (a.params.empty()) fmt::print("  parameters: none\n");
     for (const hsr::ParamSpec& p : a.params) {
       std::string values = p.type == hsr::ParamType::Choice ? fmt::format("{}", fmt::join(p.choices, "|"))

@@ -43,13 +43,16 @@ struct Guarantee {
     Exact,          // no wrong pixel (differences only where verify finds them ambiguous)
     ExactWhen,      // exact whenever `holds` is true; otherwise wrong pixels are reported, not failed
     Approximate,    // wrong pixels at most maxWrongFraction of the covered pixels
-    FailsByDesign,  // wrong pixels > 0 on each scene of failsOn (with its own camera), 0 elsewhere
+    FailsByDesign,  // wrong pixels > 0 on each scene of failsOn (with its own camera); elsewhere 0,
+                    // wherever `holds` is true when it is given (the condition under which it is exact)
   };
   Kind kind = Kind::Exact;
   /// ExactWhen: the condition; Approximate: what is bounded; FailsByDesign: why it fails.
   std::string condition;
-  /// ExactWhen: whether the condition holds for a scene, camera and options.
+  /// ExactWhen (and optionally FailsByDesign, off its failure scenes): whether the condition
+  /// under which it is exact holds for a scene, camera and options.
   std::function<bool(const Scene&, const Camera&, const RenderOptions&)> holds;
+  std::string exactWhen;  // FailsByDesign with `holds`: that condition, in words
   double maxWrongFraction = 0;        // Approximate
   std::vector<std::string> failsOn;   // FailsByDesign: scene names as loadScene takes them
 
@@ -87,7 +90,13 @@ struct AlgorithmInfo {
   std::string summary;  // one line
   std::string source;   // the documents it comes from (docs/references.md names)
   std::vector<ParamSpec> params;
-  Guarantee guarantee;
+  Guarantee guarantee;  // at its default parameters
+  /// When the guarantee depends on the parameters (a sort key, an order): the guarantee with
+  /// these; unset: `guarantee` for all.
+  std::function<Guarantee(const AlgorithmParams&)> guaranteeFor;
+  Guarantee guaranteeWith(const AlgorithmParams& params) const {
+    return guaranteeFor ? guaranteeFor(params) : guarantee;
+  }
   /// Fills Frame::writes when RenderOptions::countWrites is set (the overdraw picture), or throws
   /// InputError when it cannot with these parameters.
   AlgorithmFn run;

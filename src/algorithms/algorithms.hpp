@@ -11,6 +11,15 @@ namespace hsr::algo {
 
 AlgorithmInfo zbufferAlgorithm();  // zbuffer.cpp: the textbook z-buffer, and the tiled one's dispatch
 AlgorithmInfo raycastAlgorithm();  // raycast.cpp: the exact reference
+AlgorithmInfo painterAlgorithm();         // painter.cpp
+AlgorithmInfo reversePainterAlgorithm();  // reverse_painter.cpp
+AlgorithmInfo sortedZbufferAlgorithm();   // sorted_zbuffer.cpp
+
+/// What a list-priority algorithm ordering faces by one sort key fails on (painter.cpp): the
+/// painter's with that key, and the reverse painter's with that order (the same image).
+Guarantee listPriorityFailures(const std::string& key);
+/// The scenes of the conformance suite where that order is wrong (failures.cpp).
+std::vector<std::string> listPriorityFailureScenes(const std::string& key);
 
 /// The production z-buffer: binned, tiled, SIMD, multithreaded (zbuffer_tiled.cpp).
 void zbufferTiled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);

@@ -108,6 +108,7 @@ class FragmentWriter {
       if (winner_[idx]) return;
     }
     if (keepWinner_) winner_[idx] = i + 1;
+    ++n.written;
     if (color_) {
       ++n.colorWrites;
       if constexpr (R == WriteRule::Blend) frame_.color[idx] = over(colorOf(tris_[i]), frame_.color[idx]);
@@ -150,8 +151,17 @@ uint64_t drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const 
                   const TriangleShader& shade, Frame& frame, DrawCounters& counters, const DerivedScene* derived) {
   FragmentWriter<R, S, M> writer(tris, cam, opt, shade, frame, derived);
   const int threads = resolveThreads(opt.threads);
+  // The reverse painter's stops where every pixel is written: nothing more can show.
+  auto full = [](const DrawCounters& n, uint64_t pixels) { return R == WriteRule::WhereUnwritten && n.written == pixels; };
   if (raster != DrawRaster::Binned) {
-    for (uint32_t i = 0; i < tris.size(); ++i) writer.draw(i, raster, 0, 0, cam.width - 1, cam.height - 1, counters);
+    const uint64_t pixels = uint64_t(cam.width) * uint64_t(cam.height);
+    for (uint32_t i = 0; i < tris.size(); ++i) {
+      if (full(counters, pixels)) {
+        counters.skippedFull += tris.size() - i;
+        break;
+      }
+      writer.draw(i, raster, 0, 0, cam.width - 1, cam.height - 1, counters);
+    }
     writer.resolveRows(0, cam.height, counters);
     return writer.bytes();
   }
@@ -160,9 +170,15 @@ uint64_t drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const 
   std::vector<DrawCounters> perTile(bins.size());
   parallelFor(0, bins.size(), threads, [&](size_t tile) {
     const int x0 = int(tile % size_t(tilesX)) * kBinTile, y0 = int(tile / size_t(tilesX)) * kBinTile;
-    for (uint32_t i : bins[tile])
-      writer.draw(i, DrawRaster::HalfSpace, x0, y0, std::min(x0 + kBinTile, cam.width) - 1,
-                  std::min(y0 + kBinTile, cam.height) - 1, perTile[tile]);
+    const int x1 = std::min(x0 + kBinTile, cam.width) - 1, y1 = std::min(y0 + kBinTile, cam.height) - 1;
+    const uint64_t pixels = uint64_t(x1 - x0 + 1) * uint64_t(y1 - y0 + 1);
+    for (size_t k = 0; k < bins[tile].size(); ++k) {
+      if (full(perTile[tile], pixels)) {
+        perTile[tile].skippedFull += bins[tile].size() - k;
+        break;
+      }
+      writer.draw(bins[tile][k], DrawRaster::HalfSpace, x0, y0, x1, y1, perTile[tile]);
+    }
   });
   std::vector<DrawCounters> perRow(size_t(cam.height));
   parallelFor(0, size_t(cam.height), threads, [&](size_t y) { writer.resolveRows(int(y), int(y) + 1, perRow[y]); });
@@ -258,6 +274,7 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
   st.memory_bytes = bufferBytes + triangles.capacity() * sizeof(SetupTriangle) + fe.memoryBytes() + frameBytes(frame);
   st.setDetail("rasterizer", drawRasterName(raster));
   st.setDetail("write_rule", writeRuleName(rule));
+  if (rule == WriteRule::WhereUnwritten) st.setDetail("skipped_full", n.skippedFull);
 }
 
 }  // namespace hsr::algo

@@ -20,7 +20,7 @@ namespace hsr::algo {
 enum class WriteRule : uint8_t {
   DepthTest,       // the z-buffer: written where strictly nearer than the stored depth (ties keep the first)
   Overwrite,       // the painter's: every fragment overwrites; no depth buffer
-  WhereUnwritten,  // the reverse painter's: written only where nothing was written yet
+  WhereUnwritten,  // the reverse painter's: written only where nothing was written yet; stops when all is
   Blend,           // transparency: the colour composited over by the triangle's alpha; ids and depth overwritten
 };
 const char* writeRuleName(WriteRule rule);
@@ -43,11 +43,15 @@ struct DrawCounters {
   uint64_t depthWrites = 0;  // depth values stored (DepthTest only)
   uint64_t colorWrites = 0;  // fragments that wrote a pixel's colour (0 when the frame keeps no colour)
   uint64_t covered = 0;      // pixels showing a surface at the end
+  uint64_t written = 0;      // fragments that wrote a pixel (with or without colour)
+  uint64_t skippedFull = 0;  // WhereUnwritten: triangles (binned: triangle-tile pairs) not drawn, all full
   void add(const DrawCounters& o) {
     depthTests += o.depthTests;
     depthWrites += o.depthWrites;
     colorWrites += o.colorWrites;
     covered += o.covered;
+    written += o.written;
+    skippedFull += o.skippedFull;
   }
 };
 

@@ -13,11 +13,20 @@
 namespace hsr {
 namespace {
 
+void checkDeclaration(const AlgorithmInfo& a);
+
 std::vector<AlgorithmInfo>& registry() {
-  static std::vector<AlgorithmInfo> list = {
+  static std::vector<AlgorithmInfo> list = [] {
+    std::vector<AlgorithmInfo> builtIn = {
       algo::zbufferAlgorithm(),
       algo::raycastAlgorithm(),
-  };
+      algo::painterAlgorithm(),
+      algo::reversePainterAlgorithm(),
+      algo::sortedZbufferAlgorithm(),
+    };
+    for (const AlgorithmInfo& a : builtIn) checkDeclaration(a);
+    return builtIn;
+  }();
   return list;
 }
 
@@ -103,7 +112,8 @@ std::string Guarantee::describe() const {
       return "approximate: " + condition + " (wrong pixels at most " + fmtNumber(100 * maxWrongFraction) +
              "% of those covered)";
     case Kind::FailsByDesign:
-      return "fails by design on " + joined(failsOn, ", ") + (condition.empty() ? "" : " (" + condition + ")");
+      return "fails by design on " + joined(failsOn, ", ") + (condition.empty() ? "" : " (" + condition + ")") +
+             (exactWhen.empty() ? "" : "; exact when " + exactWhen);
   }
   return "?";
 }
