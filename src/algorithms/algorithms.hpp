@@ -11,6 +11,7 @@ namespace hsr::algo {
 
 AlgorithmInfo zbufferAlgorithm();  // zbuffer.cpp: the textbook z-buffer, and the tiled one's dispatch
 AlgorithmInfo raycastAlgorithm();  // raycast.cpp: the exact reference
+AlgorithmInfo bspAlgorithm();      // bsp.cpp: a BSP tree painted back to front
 
 /// The production z-buffer: binned, tiled, SIMD, multithreaded (zbuffer_tiled.cpp).
 void zbufferTiled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);

@@ -17,6 +17,7 @@ std::vector<AlgorithmInfo>& registry() {
   static std::vector<AlgorithmInfo> list = {
       algo::zbufferAlgorithm(),
       algo::raycastAlgorithm(),
+      algo::bspAlgorithm(),
   };
   return list;
 }
