@@ -53,6 +53,7 @@ class Builder {
   void addInputPolygons();
   uint32_t chooseSplitter(const std::vector<uint32_t>& list) const;
   void partition(Job& job, std::vector<Job>& stack);
+  void closeTJunctions();
   void finish(std::vector<BspTree::Node>& nodes, std::vector<BspTree::Fragment>& fragments,
               std::vector<dvec3>& vertices);
 
@@ -213,6 +214,62 @@ void Builder::partition(Job& job, std::vector<Job>& stack) {
   }
 }
 
+bool lexLess(const dvec3& a, const dvec3& b) {
+  return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
+}
+
+// Fragments of one face meet along its cuts, and a later cut of one side puts a vertex on the
+// shared edge that the other side lacks (a T-junction): snapped to the pixel grid, the two would
+// leave pixel-wide cracks at a few centres. So every fragment edge gets, in order, the vertices of
+// its face's other fragments that lie on it (within epsilon); then the shared edges are the same
+// vertices on both sides, and the rasterizers' fill rule covers each centre once.
+void Builder::closeTJunctions() {
+  std::vector<uint32_t> byFace(placed_);
+  std::stable_sort(byFace.begin(), byFace.end(),
+                   [&](uint32_t a, uint32_t b) { return polygons_[a].face < polygons_[b].face; });
+  std::vector<dvec3> points, out;
+  std::vector<std::pair<double, dvec3>> onEdge;
+  for (size_t i = 0; i < byFace.size();) {
+    size_t e = i;
+    while (e < byFace.size() && polygons_[byFace[e]].face == polygons_[byFace[i]].face) ++e;
+    if (e - i >= 2) {
+      points.clear();
+      for (size_t k = i; k < e; ++k) {
+        const auto v = verticesOf(polygons_[byFace[k]]);
+        points.insert(points.end(), v.begin(), v.end());
+      }
+      std::sort(points.begin(), points.end(), lexLess);
+      points.erase(std::unique(points.begin(), points.end()), points.end());
+      for (size_t k = i; k < e; ++k) {
+        WorkPolygon& p = polygons_[byFace[k]];
+        out.clear();
+        for (uint32_t j = 0; j < p.count; ++j) {
+          const dvec3 u = pool_[p.first + j], v = pool_[p.first + (j + 1) % p.count];
+          out.push_back(u);
+          const dvec3 lo = glm::min(u, v) - epsilon_, hi = glm::max(u, v) + epsilon_, edge = v - u;
+          const double length2 = glm::dot(edge, edge);
+          if (!(length2 > 0)) continue;
+          onEdge.clear();
+          auto it = std::lower_bound(points.begin(), points.end(), dvec3(lo.x, -INFINITY, -INFINITY), lexLess);
+          for (; it != points.end() && it->x <= hi.x; ++it) {
+            const dvec3& x = *it;
+            if (x == u || x == v || x.y < lo.y || x.y > hi.y || x.z < lo.z || x.z > hi.z) continue;
+            const double t = glm::dot(x - u, edge) / length2;
+            if (t > 0 && t < 1 && glm::length(u + t * edge - x) <= epsilon_) onEdge.emplace_back(t, x);
+          }
+          std::sort(onEdge.begin(), onEdge.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+          for (const auto& [t, x] : onEdge) out.push_back(x);
+        }
+        if (out.size() == p.count) continue;
+        p.first = uint32_t(pool_.size());
+        p.count = uint32_t(out.size());
+        pool_.insert(pool_.end(), out.begin(), out.end());
+      }
+    }
+    i = e;
+  }
+}
+
 // The tree's arrays: nodes as built, fragments in node order with their vertices packed.
 void Builder::finish(std::vector<BspTree::Node>& nodes, std::vector<BspTree::Fragment>& fragments,
                      std::vector<dvec3>& vertices) {
@@ -248,6 +305,7 @@ BspTree BspTree::build(const Scene& scene, const BspBuildOptions& options) {
     stack.pop_back();
     b.partition(job, stack);
   }
+  b.closeTJunctions();
   tree.splits_ = b.splits_;
   tree.depth_ = b.depth_;
   b.finish(tree.nodes_, tree.fragments_, tree.vertices_);
@@ -287,6 +345,8 @@ struct BuiltBsp {
   DerivedScene derived;
 };
 
+constexpr size_t kFragmentsPerMesh = 1024;
+
 uint64_t mixBytes(uint64_t h, const void* data, size_t bytes) {
   const auto* p = static_cast<const unsigned char*>(data);
   for (size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 0x100000001b3ull;  // FNV-1a
@@ -312,10 +372,12 @@ std::shared_ptr<const BuiltBsp> buildBsp(const Scene& scene, const BspBuildOptio
   const BspTree& tree = built->tree;
   Scene& s = built->scene;
   s.source = scene.source + " (bsp fragments)";
-  s.beginMesh("bsp");
   s.positions.assign(tree.vertices().begin(), tree.vertices().end());
   std::vector<uint32_t> indices;
   for (const BspTree::Fragment& f : tree.fragments()) {
+    // Fragments are in node order, a subtree's together (a convex cell of space): meshes of
+    // consecutive fragments are compact, so the front end culls those outside the view whole.
+    if (s.faceCount() % kFragmentsPerMesh == 0) s.beginMesh("bsp");
     indices.resize(f.vertexCount);
     for (uint32_t k = 0; k < f.vertexCount; ++k) indices[k] = f.firstVertex + k;
     s.addFace(indices, scene.faceColors[f.face]);
