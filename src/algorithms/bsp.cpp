@@ -343,6 +343,7 @@ struct BuiltBsp {
   BspTree tree;
   Scene scene;
   DerivedScene derived;
+  std::vector<uint32_t> fragmentOf;  // per face of `scene`: the fragment it is part of
 };
 
 constexpr size_t kFragmentsPerMesh = 1024;
@@ -373,19 +374,35 @@ std::shared_ptr<const BuiltBsp> buildBsp(const Scene& scene, const BspBuildOptio
   Scene& s = built->scene;
   s.source = scene.source + " (bsp fragments)";
   s.positions.assign(tree.vertices().begin(), tree.vertices().end());
-  std::vector<uint32_t> indices;
-  for (const BspTree::Fragment& f : tree.fragments()) {
+  // Each fragment as a fan of triangles around its centre (an added vertex), one face each: a
+  // convex fragment's vertices on one line (where a neighbour's cut ends, a T-junction) are then
+  // corners of non-degenerate triangles, so the snapped fragments meet without a crack.
+  // (Triangulated as one polygon, such a vertex would be dropped as a zero-area ear.)
+  for (uint32_t i = 0; i < tree.fragments().size(); ++i) {
+    const BspTree::Fragment& f = tree.fragments()[i];
     // Fragments are in node order, a subtree's together (a convex cell of space): meshes of
     // consecutive fragments are compact, so the front end culls those outside the view whole.
-    if (s.faceCount() % kFragmentsPerMesh == 0) s.beginMesh("bsp");
-    indices.resize(f.vertexCount);
-    for (uint32_t k = 0; k < f.vertexCount; ++k) indices[k] = f.firstVertex + k;
-    s.addFace(indices, scene.faceColors[f.face]);
+    if (i % kFragmentsPerMesh == 0) s.beginMesh("bsp");
+    auto addFace = [&](std::initializer_list<uint32_t> corners) {
+      s.addFace(corners, scene.faceColors[f.face]);
+      built->fragmentOf.push_back(i);
+    };
+    if (f.vertexCount == 3) {
+      addFace({f.firstVertex, f.firstVertex + 1, f.firstVertex + 2});
+      continue;
+    }
+    dvec3 centre{0.0};
+    for (uint32_t k = 0; k < f.vertexCount; ++k) centre += s.positions[f.firstVertex + k];
+    const uint32_t c = uint32_t(s.positions.size());
+    s.positions.push_back(centre / double(f.vertexCount));
+    for (uint32_t k = 0; k < f.vertexCount; ++k)
+      addFace({c, f.firstVertex + k, f.firstVertex + (k + 1) % f.vertexCount});
   }
   s.finalize();
   built->derived.scene = &s;
-  for (const BspTree::Fragment& f : tree.fragments()) built->derived.face.push_back(f.face);
-  for (const Triangle& t : s.triangles) built->derived.triangle.push_back(tree.fragments()[t.face].triangle);
+  for (uint32_t fragment : built->fragmentOf) built->derived.face.push_back(tree.fragments()[fragment].face);
+  for (const Triangle& t : s.triangles)
+    built->derived.triangle.push_back(tree.fragments()[built->fragmentOf[t.face]].triangle);
   return built;
 }
 
@@ -438,12 +455,13 @@ void bsp(const Scene& scene, const Camera& camera, const RenderOptions& options,
   const double traverseMs = timer.lap();
 
   // Set-up triangles in their fragment's rank, stably: a counting sort, linear in the triangles.
+  const std::vector<uint32_t>& fragmentOf = bsp->fragmentOf;
   const OrderFn byRank = [&](std::vector<SetupTriangle>& tris) {
     std::vector<uint32_t> start(rank.size() + 1, 0);
-    for (const SetupTriangle& t : tris) ++start[rank[t.face] + 1];
+    for (const SetupTriangle& t : tris) ++start[rank[fragmentOf[t.face]] + 1];
     for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
     std::vector<SetupTriangle> sorted(tris.size());
-    for (const SetupTriangle& t : tris) sorted[start[rank[t.face]]++] = t;
+    for (const SetupTriangle& t : tris) sorted[start[rank[fragmentOf[t.face]]]++] = t;
     tris.swap(sorted);
   };
   drawScene(scene, camera, options, WriteRule::Overwrite, drawRasterOf(params), byRank, frame, &bsp->derived);
