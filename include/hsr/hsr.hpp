@@ -1,5 +1,6 @@
 // hsr: hidden-surface removal toolkit. Include this one header for the whole public API.
 #pragma once
+#include <hsr/bsp.hpp>
 #include <hsr/builtin.hpp>
 #include <hsr/camera.hpp>
 #include <hsr/common.hpp>

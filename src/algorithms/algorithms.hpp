@@ -11,6 +11,7 @@ namespace hsr::algo {
 
 AlgorithmInfo zbufferAlgorithm();  // zbuffer.cpp: the textbook z-buffer, and the tiled one's dispatch
 AlgorithmInfo raycastAlgorithm();  // raycast.cpp: the exact reference
+AlgorithmInfo bspAlgorithm();      // bsp.cpp: a BSP tree painted back to front
 AlgorithmInfo painterAlgorithm();         // painter.cpp
 AlgorithmInfo reversePainterAlgorithm();  // reverse_painter.cpp
 AlgorithmInfo sortedZbufferAlgorithm();   // sorted_zbuffer.cpp

@@ -23,6 +23,7 @@ std::vector<AlgorithmInfo>& registry() {
       algo::painterAlgorithm(),
       algo::reversePainterAlgorithm(),
       algo::sortedZbufferAlgorithm(),
+      algo::bspAlgorithm(),
     };
     for (const AlgorithmInfo& a : builtIn) checkDeclaration(a);
     return builtIn;
