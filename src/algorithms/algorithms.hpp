@@ -5,7 +5,10 @@
 // buffers present, or calls Frame::clear() first (the drawing service, draw.hpp, does).
 #pragma once
 #include <hsr/algorithm.hpp>
+#include <hsr/bsp.hpp>
 #include <hsr/render.hpp>
+
+#include "algorithms/draw.hpp"
 
 namespace hsr::algo {
 
@@ -15,6 +18,12 @@ AlgorithmInfo bspAlgorithm();      // bsp.cpp: a BSP tree painted back to front
 AlgorithmInfo painterAlgorithm();         // painter.cpp
 AlgorithmInfo reversePainterAlgorithm();  // reverse_painter.cpp
 AlgorithmInfo sortedZbufferAlgorithm();   // sorted_zbuffer.cpp
+
+/// The scene's BSP tree (built once per scene and options, bsp.cpp) drawn in its order from the
+/// camera, back to front or front to back, under `rule`; fills the statistics and the tree's
+/// details (nodes, fragments, splits, depth, built, build_ms).
+void drawInBspOrder(const Scene& scene, const Camera& camera, const RenderOptions& options,
+                    const BspBuildOptions& build, WriteRule rule, DrawRaster raster, bool frontToBack, Frame& frame);
 
 /// What a list-priority algorithm ordering faces by one sort key fails on (painter.cpp): the
 /// painter's with that key, and the reverse painter's with that order (the same image).

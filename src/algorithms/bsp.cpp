@@ -439,10 +439,18 @@ dvec4 homogeneousEye(const Camera& camera) {
 
 void bsp(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
          Frame& frame) {
-  Timer timer;
   BspBuildOptions build;
   build.heuristic = params.text("heuristic") == "first" ? BspHeuristic::First : BspHeuristic::Scored;
   build.maxFragments = uint64_t(params.integer("max-fragments"));
+  drawInBspOrder(scene, camera, options, build, WriteRule::Overwrite, drawRasterOf(params), false, frame);
+  frame.stats.setDetail("heuristic", params.text("heuristic"));
+}
+
+}  // namespace
+
+void drawInBspOrder(const Scene& scene, const Camera& camera, const RenderOptions& options,
+                    const BspBuildOptions& build, WriteRule rule, DrawRaster raster, bool frontToBack, Frame& frame) {
+  Timer timer;
   bool built = false;
   const std::shared_ptr<const BuiltBsp> bsp = cachedBsp(scene, build, built);
   const double buildMs = timer.lap();
@@ -451,7 +459,7 @@ void bsp(const Scene& scene, const Camera& camera, const RenderOptions& options,
   std::vector<uint32_t> order;
   tree.backToFront(homogeneousEye(camera), order);
   std::vector<uint32_t> rank(order.size());
-  for (uint32_t i = 0; i < order.size(); ++i) rank[order[i]] = i;
+  for (uint32_t i = 0; i < order.size(); ++i) rank[order[i]] = frontToBack ? uint32_t(order.size()) - 1 - i : i;
   const double traverseMs = timer.lap();
 
   // Set-up triangles in their fragment's rank, stably: a counting sort, linear in the triangles.
@@ -464,12 +472,11 @@ void bsp(const Scene& scene, const Camera& camera, const RenderOptions& options,
     for (const SetupTriangle& t : tris) sorted[start[rank[fragmentOf[t.face]]]++] = t;
     tris.swap(sorted);
   };
-  drawScene(scene, camera, options, WriteRule::Overwrite, drawRasterOf(params), byRank, frame, &bsp->derived);
+  drawScene(scene, camera, options, rule, raster, byRank, frame, &bsp->derived);
 
   Stats& st = frame.stats;
   if (built) st.addTime("build", buildMs);
   st.addTime("traverse", traverseMs);
-  st.setDetail("heuristic", params.text("heuristic"));
   st.setDetail("nodes", uint64_t(tree.nodes().size()));
   st.setDetail("fragments", uint64_t(tree.fragments().size()));
   st.setDetail("splits", tree.splits());
@@ -480,8 +487,6 @@ void bsp(const Scene& scene, const Camera& camera, const RenderOptions& options,
                      tree.fragments().size() * sizeof(BspTree::Fragment) + tree.vertices().size() * sizeof(dvec3) +
                      rank.size() * 2 * sizeof(uint32_t);
 }
-
-}  // namespace
 
 AlgorithmInfo bspAlgorithm() {
   AlgorithmInfo a;
