@@ -48,7 +48,7 @@ void raycast(const Scene& scene, const Camera& camera, const RenderOptions& opti
   });
   st.addTime("trace", timer.lap());
 
-  st.algorithm = "raycast";  // (image size, faces and triangles: render() set them)
+  // (name, parameters, image size, faces and triangles: render() sets them)
   st.triangles_degenerate = bvh.degenerateTriangles();
   st.depth_tests = st.depth_writes = st.covered_pixels = 0;
   for (const RowCounters& row : rows) {

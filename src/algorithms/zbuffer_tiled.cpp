@@ -186,12 +186,9 @@ void zbufferTiled(const Scene& scene, const Camera& cam, const RenderOptions& op
   if (byMeshes && depthOnly) {
     occluders.render(scene, cam, {opt.depthFormat, opt.cull, opt.threads});
     timer.lap();
-    const std::vector<std::pair<std::string, std::string>> params = st.params;
-    occluders.depthImage(frame);  // (its statistics: the buffer's, and covered_pixels)
+    occluders.depthImage(frame);  // (its statistics: the buffer's, and covered_pixels; render() names the algorithm)
     std::erase_if(st.time_ms, [](const auto& stage) { return stage.first == "total"; });
     st.addTime("resolve", timer.lap());
-    st.algorithm = "zbuffer";
-    st.params = params;
     st.setDetail("rasterizer", "tiled");
     st.color_writes = 0;
     st.memory_bytes += frame.depth.size() * sizeof(float);

@@ -64,9 +64,9 @@ void render(const Scene& scene, const Camera& camera, const RenderOptions& optio
   frame.allocate(camera.width, camera.height, options.outputs);
   if (options.countWrites) frame.writes.assign(size_t(camera.width) * size_t(camera.height), 0);
   else frame.writes.clear();
-  frame.stats.algorithm = algorithm->name;
-  frame.stats.params = params.entries();
   algorithm->run(scene, camera, options, params, frame);
+  // (After the run: a path that takes over another's statistics, as the tiled z-buffer's depth
+  // image does from its occlusion buffer, is still named as what ran.)
   frame.stats.algorithm = algorithm->name;
   frame.stats.params = params.entries();
   frame.stats.addTime("total", total.ms());
