@@ -9,4 +9,7 @@
 #include <hsr/io.hpp>
 #include <hsr/render.hpp>
 #include <hsr/scene.hpp>
+#include <hsr/verify.hpp>
+#include <hsr/views.hpp>
 #include <hsr/occlusion.hpp>
+#include <hsr/precision.hpp>

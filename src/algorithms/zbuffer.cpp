@@ -8,7 +8,7 @@
 //         depth[x, y] = z;  colour[x, y] = its colour
 //
 // That loop is the drawing service's depth-test rule (draw.cpp, FragmentWriter::apply), drawn in
-// submission order: so `raster=halfspace` and `raster=scanline` are this file's few lines. Its
+// submission order: so `raster=halfspace`, `scanline` and `binned` are this file's few lines. Its
 // counters are the textbook's: one z comparison per fragment, one write per fragment that won.
 // `raster=tiled` (the default) is the production z-buffer of zbuffer_tiled.cpp: the same image,
 // bit for bit, computed with far fewer tests on every core.
@@ -27,7 +27,9 @@ void zbuffer(const Scene& scene, const Camera& camera, const RenderOptions& opti
                        "whole blocks at once); add --param raster=halfspace for the textbook z-buffer");
     return zbufferTiled(scene, camera, options, frame);
   }
-  const DrawRaster textbook = raster == "scanline" ? DrawRaster::Scanline : DrawRaster::HalfSpace;
+  const DrawRaster textbook = raster == "scanline" ? DrawRaster::Scanline
+                              : raster == "binned"  ? DrawRaster::Binned
+                                                    : DrawRaster::HalfSpace;
   drawScene(scene, camera, options, WriteRule::DepthTest, textbook, /*order: submission*/ {}, frame);
 }
 
@@ -38,11 +40,12 @@ AlgorithmInfo zbufferAlgorithm() {
   a.name = "zbuffer";
   a.summary = "z-buffer: a depth test per pixel, triangles in submission order";
   a.source = "KTH report, KTH thesis, lecture notes, Java chapter";
-  a.params = {{"raster", ParamType::Choice, "tiled", {"tiled", "halfspace", "scanline"}, -1e300, 1e300,
+  a.params = {{"raster", ParamType::Choice, "tiled", {"tiled", "halfspace", "scanline", "binned"}, -1e300, 1e300,
                "tiled: the production z-buffer (binned, SIMD, every core; counts only the tests it makes); "
                "halfspace: the textbook z-buffer on the scalar reference rasterizer, every fragment tested in "
                "submission order; scanline: the same on the lecture notes' scanline rasterizer, depth stepped "
-               "along each span"}};
+               "along each span; binned: the textbook z-buffer on the drawing service's binned rasterizer (64x64 "
+               "tiles on every core, scalar), the one the painter's family draws with by default, so times compare"}};
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.guarantee.condition = "up to the depth format's precision: z-fighting is counted as ambiguous";
   a.run = zbuffer;

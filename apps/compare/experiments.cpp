@@ -1,0 +1,81 @@
+// The study's experiments beyond scene x algorithm: z-fighting per depth format, the memory of
+// the buffers, and depth precision curves (study.hpp).
+#include "study.hpp"
+
+#include <fmt/core.h>
+
+#include <cmath>
+#include <filesystem>
+
+namespace hsr::cli {
+
+Json zfightExperiment(const StudySettings& settings, bool quick) {
+  const int w = quick ? 160 : 480, h = quick ? 120 : 360;
+  Json rows = Json::array();
+  const char* formats[] = {"u16:z", "u24:z", "u32:z", "f32:z", "f32:reversed", "u16:inv", "u24:linear"};
+  std::filesystem::create_directories(settings.outDir + "/img/zfight");
+  for (const char* gap : {"1e-2", "1e-3", "1e-4", "1e-5"}) {
+    const std::string name = std::string("builtin:zfight?gap=") + gap;
+    Scene scene = loadScene(name);
+    const CameraSpec spec = scene.camera ? *scene.camera : frameBounds(scene.bounds());
+    const Camera camera = resolveCamera(spec, w, h, scene.bounds(), name);
+    RenderOptions ref;
+    ref.algorithm = "raycast";
+    ref.threads = settings.threads;
+    const Frame reference = render(scene, camera, ref);
+    for (const char* format : formats) {
+      if (settings.interrupted && settings.interrupted->load()) return rows;
+      RenderOptions options;
+      options.depthFormat = DepthFormat::parse(format);
+      options.threads = settings.threads;
+      const Frame frame = render(scene, camera, options);
+      uint64_t fighting = 0;
+      for (size_t i = 0; i < frame.faceId.size(); ++i) fighting += frame.faceId[i] != reference.faceId[i];
+      const std::string picture = fmt::format("img/zfight/gap{}-{}.png", gap, DepthFormat::parse(format).name());
+      std::string file = picture;
+      std::replace(file.begin(), file.end(), ':', '_');
+      writeColorPng(frame, settings.outDir + "/" + file);
+      rows.push_back({{"gap", std::stod(gap)}, {"format", format}, {"fighting_pixels", fighting},
+                      {"covered_pixels", frame.stats.covered_pixels}, {"image", file}});
+    }
+  }
+  return rows;
+}
+
+Json memoryTable() {
+  Json rows = Json::array();
+  for (const auto& [w, h] : {std::pair{640, 480}, std::pair{1024, 768}, std::pair{1366, 768}, std::pair{1920, 1080}})
+    for (const char* storage : {"u16", "u24", "u32", "f32"}) {
+      const DepthFormat f = DepthFormat::parse(storage);
+      const uint64_t pixels = uint64_t(w) * uint64_t(h);
+      rows.push_back({{"size", fmt::format("{}x{}", w, h)},
+                      {"pixels", pixels},
+                      {"format", storage},
+                      {"depth_bits", f.bits()},
+                      {"depth_bytes_packed", pixels * uint64_t(f.bits()) / 8},  // as the documents count
+                      {"depth_bytes_hsr", pixels * uint64_t(f.bytesPerPixel())},  // as hsr allocates it
+                      {"color_bytes", pixels * 4},
+                      {"face_id_bytes", pixels * 4}});
+    }
+  return rows;
+}
+
+Json precisionCurves(double near, double far) {
+  Json curves = Json::array();
+  const char* formats[] = {"u16:z", "u24:z", "u32:z", "f32:z", "f32:reversed", "u16:inv", "u24:linear"};
+  for (const char* name : formats) {
+    const DepthPrecision p{DepthFormat::parse(name), near, far};
+    Json steps = Json::array(), fractions = Json::array();
+    constexpr int kPoints = 48;
+    for (int i = 0; i <= kPoints; ++i) {
+      const double d = near * std::pow(far / near, double(i) / kPoints);  // log-spaced eye depths
+      steps.push_back({{"eye_depth", d}, {"relative_step", p.step(d) / d}});
+      const double x = double(i) / kPoints;
+      fractions.push_back({{"range_part", x}, {"value_fraction", p.valueFraction(x)}});
+    }
+    curves.push_back({{"format", name}, {"steps", steps}, {"fractions", fractions}});
+  }
+  return {{"near", near}, {"far", far}, {"curves", curves}};
+}
+
+}  // namespace hsr::cli
