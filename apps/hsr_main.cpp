@@ -490,9 +490,13 @@ BenchRecord timeFrames(const BenchFlags& f, const Job& job, hsr::Frame& frame) {
   return rec;
 }
 
+// The stages every timed frame ran (a stage of only some frames, such as a build, is the first frame's).
+bool everyFrame(const BenchRecord& rec, const std::vector<double>& stageMs) { return stageMs.size() == rec.frameMs.size(); }
+
 std::string stageText(const BenchRecord& rec) {
   std::string text;
-  for (const auto& [stage, ms] : rec.stageMs) text += fmt::format("{}{} {:.3f}", text.empty() ? "" : ", ", stage, median(ms));
+  for (const auto& [stage, ms] : rec.stageMs)
+    if (everyFrame(rec, ms)) text += fmt::format("{}{} {:.3f}", text.empty() ? "" : ", ", stage, median(ms));
   return text;
 }
 
@@ -529,7 +533,8 @@ Json benchJson(const BenchRecord& rec, const Job& job, const hsr::Frame& frame, 
   out["first_frame_ms"] = rec.firstMs;
   Json firstStages = Json::object(), stages = Json::object();
   for (const auto& [stage, ms] : rec.firstStages) firstStages[stage] = ms;
-  for (const auto& [stage, ms] : rec.stageMs) stages[stage] = median(ms);
+  for (const auto& [stage, ms] : rec.stageMs)
+    if (everyFrame(rec, ms)) stages[stage] = median(ms);
   out["first_frame_stages_ms"] = firstStages;
   out["stage_median_ms"] = stages;
   out["build"] = {{"version", HSR_VERSION},
