@@ -324,7 +324,7 @@ TEST_F(CommandLine, AlgorithmsListsEveryAlgorithmWithGuaranteeAndParameters) {
   ASSERT_GE(list.size(), 2u);
   EXPECT_EQ(list[0]["name"], "zbuffer");
   EXPECT_EQ(list[0]["params"][0]["name"], "raster");
-  EXPECT_EQ(list[0]["params"][0]["values"].size(), 3u);
+  EXPECT_EQ(list[0]["params"][0]["values"].size(), 4u);
   EXPECT_EQ(list[1]["guarantee"], "exact");
 }
 

@@ -206,6 +206,29 @@ Json failureClaim(const Json& results) {
                painterFails && bspExact ? "holds" : "does not hold");
 }
 
+// KTH thesis: z-fighting, mitigated by rendering the depth range in smaller parts.
+Json zfightClaim(const Json& results) {
+  const char* text = "Z-fighting where precision is insufficient; rendering the depth range in smaller parts mitigates it";
+  if (!results.contains("zfight")) return notMeasured(text, "KTH thesis", "the z-fighting experiment did not run");
+  std::string measured;
+  bool fights = false, mitigated = true;
+  for (const Json& once : results["zfight"]) {
+    if (once["format"] != "u16:z") continue;
+    for (const Json& parts : results["zfight"])
+      if (parts["gap"] == once["gap"] && parts["depth_slices"].get<int>() > 1 &&
+          parts["format"].get<std::string>().rfind("u16:z", 0) == 0) {
+        const uint64_t a = once["fighting_pixels"], b = parts["fighting_pixels"];
+        fights |= a > 0;
+        mitigated &= b <= a;
+        measured += fmt::format("{}gap {:g}: {} px at once ({:.1f} ms), {} px in {} parts ({:.1f} ms)",
+                                measured.empty() ? "" : "; ", once["gap"].get<double>(), a, once["ms"].get<double>(), b,
+                                parts["depth_slices"].get<int>(), parts["ms"].get<double>());
+      }
+  }
+  return claim(text, "KTH thesis", "u16:z, pixels showing the wrong surface: " + measured,
+               fights && mitigated ? "holds" : "does not hold");
+}
+
 // The documents' memory figures, computed.
 void memoryClaims(Json& out) {
   struct Figure {
@@ -264,6 +287,7 @@ Json evaluateClaims(const Json& results) {
   out.push_back(midpointClaim(results));
   for (Json c : {reversePainterClaim(results), failureClaim(results)})
     if (!c.is_null()) out.push_back(c);
+  out.push_back(zfightClaim(results));
   memoryClaims(out);
   for (const Json& c : precisionClaims()) out.push_back(c);
   return out;

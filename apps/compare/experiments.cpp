@@ -4,15 +4,28 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 
 namespace hsr::cli {
 
+namespace {
+
+// A depth format, and the number of parts the depth range is drawn in (1: at once).
+struct ZfightSetting {
+  const char* format;
+  int slices;
+};
+const ZfightSetting kZfightSettings[] = {{"u16:z", 1}, {"u24:z", 1}, {"u32:z", 1}, {"f32:z", 1}, {"f32:reversed", 1},
+                                         {"u16:inv", 1}, {"u24:linear", 1}, {"u16:z", 4}, {"u16:z", 16}};
+
+}  // namespace
+
 Json zfightExperiment(const StudySettings& settings, bool quick) {
   const int w = quick ? 160 : 480, h = quick ? 120 : 360;
   Json rows = Json::array();
-  const char* formats[] = {"u16:z", "u24:z", "u32:z", "f32:z", "f32:reversed", "u16:inv", "u24:linear"};
   std::filesystem::create_directories(settings.outDir + "/img/zfight");
   for (const char* gap : {"1e-2", "1e-3", "1e-4", "1e-5"}) {
     const std::string name = std::string("builtin:zfight?gap=") + gap;
@@ -23,20 +36,24 @@ Json zfightExperiment(const StudySettings& settings, bool quick) {
     ref.algorithm = "raycast";
     ref.threads = settings.threads;
     const Frame reference = render(scene, camera, ref);
-    for (const char* format : formats) {
+    for (const ZfightSetting& z : kZfightSettings) {
       if (settings.interrupted && settings.interrupted->load()) return rows;
       RenderOptions options;
-      options.depthFormat = DepthFormat::parse(format);
+      options.depthFormat = DepthFormat::parse(z.format);
       options.threads = settings.threads;
+      if (z.slices > 1) options.params = {{"raster", "binned"}, {"depth-slices", std::to_string(z.slices)}};
+      const auto start = std::chrono::steady_clock::now();
       const Frame frame = render(scene, camera, options);
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
       uint64_t fighting = 0;
       for (size_t i = 0; i < frame.faceId.size(); ++i) fighting += frame.faceId[i] != reference.faceId[i];
-      const std::string picture = fmt::format("img/zfight/gap{}-{}.png", gap, DepthFormat::parse(format).name());
-      std::string file = picture;
+      const std::string label = z.slices > 1 ? fmt::format("{} in {} parts", z.format, z.slices) : z.format;
+      std::string file = fmt::format("img/zfight/gap{}-{}-{}.png", gap, z.format, z.slices);
       std::replace(file.begin(), file.end(), ':', '_');
       writeColorPng(frame, settings.outDir + "/" + file);
-      rows.push_back({{"gap", std::stod(gap)}, {"format", format}, {"fighting_pixels", fighting},
-                      {"covered_pixels", frame.stats.covered_pixels}, {"image", file}});
+      rows.push_back({{"gap", std::stod(gap)}, {"format", label}, {"depth_slices", z.slices},
+                      {"fighting_pixels", fighting}, {"covered_pixels", frame.stats.covered_pixels}, {"ms", ms},
+                      {"image", file}});
     }
   }
   return rows;
