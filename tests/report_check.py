@@ -6,8 +6,11 @@ Usage: report_check.py HSR_CLI SOURCE_DIR OUT_DIR"""
 import json
 import pathlib
 import re
+import shutil
+import signal
 import subprocess
 import sys
+import time
 
 import jsonschema
 
@@ -79,8 +82,29 @@ def check_in_browser(out):
     print(f"report_check: {loaded} images, {attrs['charts']} charts, no console messages; screenshot {shot}")
 
 
+def check_interrupt(hsr, source, out):
+    """Ctrl-C stops the study after the current run: exit 130, a valid partial report."""
+    study = subprocess.Popen([hsr, "compare", "--quick", "--quiet", "--out", str(out)], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not (out / "results.json").is_file() and study.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)  # the first case written
+    study.send_signal(signal.SIGINT)
+    stdout, stderr = study.communicate(timeout=300)
+    if study.returncode != 130:
+        fail(f"interrupted study exited {study.returncode} (expected 130): {stderr.strip()}")
+    results = json.loads((out / "results.json").read_text())
+    jsonschema.validate(results, json.loads((source / "docs" / "compare-results.schema.json").read_text()))
+    if results["complete"] or not results["cases"]:
+        fail("the interrupted study's results are not a partial report")
+    if "partial" not in (out / "index.html").read_text():
+        fail("the interrupted study's report does not say it is partial")
+
+
 def main():
     hsr, source, out = sys.argv[1], pathlib.Path(sys.argv[2]), pathlib.Path(sys.argv[3])
+    shutil.rmtree(out, ignore_errors=True)
+    check_interrupt(hsr, source, out / "interrupted")
     run_study(hsr, out)
     check_results(source, out)
     check_in_browser(out)

@@ -46,7 +46,7 @@ class FragmentWriter {
   uint64_t bytes() const { return depth_.size() * sizeof(T) + winner_.size() * sizeof(uint32_t); }
 
   // Every fragment of triangle i inside pixels [x0, x1] x [y0, y1], through the rule.
-  void draw(uint32_t i, DrawRaster raster, int x0, int y0, int x1, int y1, DrawCounters& n) {
+  void draw(uint32_t i, DrawRaster raster, int x0, int y0, int x1, int y1, DrawCounters& counters) {
     SetupTriangle t = tris_[i];
     t.minX = int16_t(std::max<int>(t.minX, x0));
     t.minY = int16_t(std::max<int>(t.minY, y0));
@@ -54,6 +54,7 @@ class FragmentWriter {
     t.maxY = int16_t(std::min<int>(t.maxY, y1));
     if (t.minX > t.maxX || t.minY > t.maxY) return;
     const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, cam_.near, cam_.far, cam_.orthographic);
+    DrawCounters n;  // counted in registers, added once per triangle
     if (raster == DrawRaster::Scanline) {
       // The eye depth stepped along the span, mapped and stored (the lecture notes' inner loop).
       rasterizeScanline(t, [&](int x, int y, double eyeDepth) {
@@ -65,6 +66,7 @@ class FragmentWriter {
         apply(i, x, y, [&] { return T(fragmentStored<S>(m, x + 0.5, m.p.b * (y + 0.5), m.q.b * (y + 0.5))); }, n);
       });
     }
+    counters.add(n);
   }
 
   // Face ids, exact eye depths and colours of rows [y0, y1) from the last fragment written to
