@@ -43,7 +43,20 @@ class FragmentWriter {
     if (keepWinner_) winner_.assign(pixels, 0);
   }
 
-  uint64_t bytes() const { return depth_.size() * sizeof(T) + winner_.size() * sizeof(uint32_t); }
+  uint64_t bytes() const {
+    return depth_.size() * sizeof(T) + winner_.size() * sizeof(uint32_t) + colors_.size() * sizeof(Rgba8);
+  }
+
+  // Every triangle's shaded colour, once (on the pool), for resolving: far fewer triangles than
+  // pixels, and a colour is the same all over its triangle.
+  void shadeTriangles(int threads) {
+    if (!color_ || R == WriteRule::Blend) return;
+    colors_.resize(tris_.size());
+    constexpr size_t kChunk = 4096;
+    parallelFor(0, (tris_.size() + kChunk - 1) / kChunk, threads, [&](size_t chunk) {
+      for (size_t i = chunk * kChunk; i < std::min(tris_.size(), (chunk + 1) * kChunk); ++i) colors_[i] = colorOf(tris_[i]);
+    });
+  }
 
   // Every fragment of triangle i inside pixels [x0, x1] x [y0, y1], through the rule.
   void draw(uint32_t i, DrawRaster raster, int x0, int y0, int x1, int y1, DrawCounters& counters) {
@@ -87,7 +100,7 @@ class FragmentWriter {
           if (triangleIds) frame_.triangleId[idx] = int32_t(derived_ ? derived_->triangle[t.triangle] : t.triangle);
           frame_.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
           // (Blend composited its colours as it drew; the others show the last written.)
-          if (color_ && R != WriteRule::Blend) frame_.color[idx] = colorOf(t);
+          if (color_ && R != WriteRule::Blend) frame_.color[idx] = colors_[winner_[idx] - 1];
         }
         ++n.covered;
       }
@@ -133,6 +146,7 @@ class FragmentWriter {
   const T clear_;
   std::vector<T> depth_;          // DepthTest: the stored values
   std::vector<uint32_t> winner_;  // per pixel: 1 + the index of the last fragment's triangle, 0 = none
+  std::vector<Rgba8> colors_;     // per triangle: its colour (shadeTriangles)
 };
 
 // Per tile of kBinTile pixels, the triangles whose box meets it, in drawing order.
@@ -164,6 +178,7 @@ uint64_t drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const 
       }
       writer.draw(i, raster, 0, 0, cam.width - 1, cam.height - 1, counters);
     }
+    writer.shadeTriangles(1);
     writer.resolveRows(0, cam.height, counters);
     return writer.bytes();
   }
@@ -182,6 +197,7 @@ uint64_t drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const 
       writer.draw(bins[tile][k], DrawRaster::HalfSpace, x0, y0, x1, y1, perTile[tile]);
     }
   });
+  writer.shadeTriangles(threads);
   std::vector<DrawCounters> perRow(size_t(cam.height));
   parallelFor(0, size_t(cam.height), threads, [&](size_t y) { writer.resolveRows(int(y), int(y) + 1, perRow[y]); });
   for (const DrawCounters& c : perTile) counters.add(c);
