@@ -25,6 +25,15 @@ Rgba8 over(Rgba8 src, Rgba8 dst) {
   return {mix(src.r, dst.r), mix(src.g, dst.g), mix(src.b, dst.b), uint8_t(a + (dst.a * keep + 127) / 255)};
 }
 
+// Per-pixel scratch kept between frames on each calling thread: a frame rewrites warm pages
+// instead of faulting fresh ones in (drawScene is not re-entered on one thread). One per use.
+enum class Scratch { Depth, Winner };
+template <class T, Scratch Use>
+std::vector<T>& scratch() {
+  thread_local std::vector<T> buffer;
+  return buffer;
+}
+
 // One frame's per-pixel state and the rule's work on it, for depth storage S and mapping M
 // (used by DepthTest only; the other rules keep no depth buffer).
 template <WriteRule R, DepthStorage S, DepthMapping M>
@@ -40,7 +49,9 @@ class FragmentWriter {
         clear_(quantizeDepth<S>(opt.depthFormat.clearValue())) {
     const size_t pixels = size_t(cam.width) * size_t(cam.height);
     if constexpr (R == WriteRule::DepthTest) depth_.assign(pixels, clear_);
+    else depth_.clear();
     if (keepWinner_) winner_.assign(pixels, 0);
+    else winner_.clear();
   }
 
   uint64_t bytes() const {
@@ -144,8 +155,9 @@ class FragmentWriter {
   const DerivedScene* derived_;
   const bool keepWinner_, color_;
   const T clear_;
-  std::vector<T> depth_;          // DepthTest: the stored values
-  std::vector<uint32_t> winner_;  // per pixel: 1 + the index of the last fragment's triangle, 0 = none
+  std::vector<T>& depth_ = scratch<T, Scratch::Depth>();  // DepthTest: the stored values
+  // Per pixel: 1 + the index of the last fragment's triangle, 0 = none.
+  std::vector<uint32_t>& winner_ = scratch<uint32_t, Scratch::Winner>();
   std::vector<Rgba8> colors_;     // per triangle: its colour (shadeTriangles)
 };
 
