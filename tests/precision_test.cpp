@@ -82,7 +82,7 @@ TEST(Precision, CountsStoredValues) {
   EXPECT_EQ((DepthPrecision{DepthFormat::parse("u16:z"), 1, 2}.valuesBetween(1.5, 1.5)), 1u);
 }
 
-TEST(Views, AnOrbitTurnsTheCameraAroundTheCentre) {
+TEST(Orbit, TurnsTheCameraAroundTheCentre) {
   hsr::CameraSpec spec;
   spec.eye = {3, 1, 4};
   spec.target = {0, 0.5, 0};

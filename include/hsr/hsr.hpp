@@ -10,6 +10,6 @@
 #include <hsr/render.hpp>
 #include <hsr/scene.hpp>
 #include <hsr/verify.hpp>
-#include <hsr/views.hpp>
+#include <hsr/orbit.hpp>
 #include <hsr/occlusion.hpp>
 #include <hsr/precision.hpp>

@@ -1,5 +1,5 @@
-// Orbits of a camera around a scene (include/hsr/views.hpp).
-#include <hsr/views.hpp>
+// Orbits of a camera around a scene (include/hsr/orbit.hpp).
+#include <hsr/orbit.hpp>
 
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>

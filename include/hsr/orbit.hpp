@@ -1,4 +1,4 @@
-// Many views of one scene: a camera turned around the scene, for benchmarks and studies that
+// Orbits: a camera turned around the scene, for benchmarks and studies that
 // render a static scene from many sides ("build once, view many times").
 #pragma once
 #include <hsr/camera.hpp>
