@@ -117,6 +117,27 @@ py::object opencvCameras(py::handle K, py::handle pose, int width, int height, p
 
 py::object optionalOf(const std::optional<double>& v) { return v ? py::object(py::float_(*v)) : py::none(); }
 
+py::array rowMajor(const hsr::dmat4& m) {
+  double v[16];
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) v[4 * r + c] = m[c][r];  // glm: [column][row]
+  return copyArray(v, {4, 4});
+}
+
+// The camera as hsr renders `scene` with it: its pose, projection and clipping planes.
+py::dict resolvedCamera(const PyCamera& c, const SceneData& d) {
+  const hsr::Camera cam = c.resolve(d.scene, "camera");
+  py::dict out;
+  out["camera_from_world"] = rowMajor(cam.cameraFromWorld);
+  out["pixel_from_camera"] = rowMajor(cam.pixelFromCamera);
+  out["near"] = cam.near;
+  out["far"] = cam.far;
+  out["orthographic"] = cam.orthographic;
+  out["width"] = cam.width;
+  out["height"] = cam.height;
+  return out;
+}
+
 std::string cameraRepr(const PyCamera& c) {
   const char* kind = c.spec.kind == hsr::CameraSpec::Kind::OpenCV ? "opencv"
                      : c.spec.orthoHeight                         ? "orthographic"
@@ -205,6 +226,10 @@ convention (pixel centres at integers: a point K projects to (u, v) lands in pix
                   "A camera from a camera JSON text or file (docs/conventions.md), as `hsr render --camera`.")
       .def("to_json", [](const PyCamera& c) { return hsr::cameraSpecToJson(c.spec); },
            "The camera JSON `hsr render --camera` reads (the image size is --size).")
+      .def("resolve", &resolvedCamera, py::arg("scene"),
+           R"(The camera as hsr renders `scene` with it: camera_from_world (4x4, into OpenCV axes),
+pixel_from_camera (4x4, rows hx, hy, d, w: pixel (hx/w, hy/w), pixel centres at +0.5, eye depth d),
+near and far (fitted to the scene when not given), orthographic, width, height.)")
       .def_readonly("width", &PyCamera::width)
       .def_readonly("height", &PyCamera::height)
       .def_property_readonly("kind", [](const PyCamera& c) {
