@@ -47,4 +47,13 @@ std::vector<glm::vec3> triangleNormals(const Scene& scene);
 /// triangle ids. Writes 3 * width * height floats to `out`.
 void resolveNormals(std::span<const glm::vec3> normals, const Frame& frame, float* out, int threads = 1);
 
+/// Writers of the attributes above (atomically, as io.hpp's): instance ids — faceValue[face id]
+/// per pixel, -1 on the background — as face ids are written (.npy int32, or .png with id + 1 as
+/// 24-bit RGB); barycentrics as .npy float32 of shape (height, width, 3).
+void writeInstanceIds(const Frame& frame, std::span<const int32_t> faceValue, const std::string& path);
+void writeBarycentrics(const Scene& scene, const Camera& camera, const Frame& frame, const std::string& path);
+/// Throws InputError "path: ..." when the writer above does not know path's extension.
+void checkInstanceIdsPath(const std::string& path);
+void checkBarycentricsPath(const std::string& path);
+
 }  // namespace hsr

@@ -163,3 +163,25 @@ def test_normals_are_the_visible_triangles(cubes):
     shown = t >= 0
     assert np.allclose(out["normal"][shown], n[t[shown]], atol=1e-6)
     assert not out["normal"][~shown].any()
+
+
+def test_cli_instance_ids_and_barycentrics_are_the_modules(tmp_path, cli):
+    scene = hsr.load("builtin:cubes")
+    camera = scene.default_camera(160, 120)
+    (tmp_path / "cam.json").write_text(camera.to_json())
+    status, err = cli("render", "builtin:cubes", "--camera", tmp_path / "cam.json", "--size", "160x120", "-q",
+                      "--instance-ids", tmp_path / "inst.npy", "--barycentric", tmp_path / "bary.npy")
+    assert status == 0, err
+    out = hsr.render(scene, camera, outputs=("instance_id", "barycentric"))
+    assert np.array_equal(np.load(tmp_path / "inst.npy"), out["instance_id"])
+    bary = np.load(tmp_path / "bary.npy")
+    assert bary.shape == (120, 160, 3) and bary.tobytes() == out["barycentric"].tobytes()
+    status, err = cli("render", "builtin:cubes", "--size", "160x120", "-q", "--instance-ids", tmp_path / "inst.png")
+    assert status == 0, err
+    png = read_png(tmp_path / "inst.png").astype(np.int64)
+    assert np.array_equal((png[..., 0] << 16 | png[..., 1] << 8 | png[..., 2]) - 1,
+                          hsr.render(scene, camera, outputs="instance_id")["instance_id"])
+    status, err = cli("render", "builtin:cubes", "--outputs", "depth,face", "--barycentric", tmp_path / "b.npy")
+    assert status == 2 and "no triangle ids" in err
+    status, err = cli("render", "builtin:cubes", "--barycentric", tmp_path / "b.png")
+    assert status == 2 and "written as .npy" in err

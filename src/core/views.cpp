@@ -3,7 +3,10 @@
 // Python module and the CLI's --instance-ids and --barycentric.
 #include <hsr/views.hpp>
 
+#include <hsr/io.hpp>
+
 #include "core/parallel.hpp"
+#include "io/encode.hpp"
 
 #include <atomic>
 #include <exception>
@@ -148,6 +151,30 @@ void resolveNormals(std::span<const glm::vec3> normals, const Frame& frame, floa
       out[3 * i + 2] = n.z;
     }
   });
+}
+
+void checkInstanceIdsPath(const std::string& path) { checkOutputPath(OutputKind::FaceIds, path); }
+
+void checkBarycentricsPath(const std::string& path) {
+  if (io::extensionOf(path) != ".npy")
+    throw InputError(path + ": barycentric coordinates are written as .npy (float32, height x width x 3)");
+}
+
+void writeInstanceIds(const Frame& frame, std::span<const int32_t> faceValue, const std::string& path) {
+  checkInstanceIdsPath(path);
+  Frame ids;  // the face-id writer, given the instance ids as its ids
+  ids.width = frame.width;
+  ids.height = frame.height;
+  ids.faceId.resize(frame.faceId.size());
+  resolveFaceValues(frame, faceValue, -1, ids.faceId.data());
+  writeFaceIds(ids, path);
+}
+
+void writeBarycentrics(const Scene& scene, const Camera& camera, const Frame& frame, const std::string& path) {
+  checkBarycentricsPath(path);
+  std::vector<float> b(3 * size_t(frame.width) * size_t(frame.height));
+  resolveBarycentrics(scene, camera, frame, b.data());
+  io::writeBytes(io::encodeNpy("<f4", frame.height, frame.width, b.data(), 3), path);
 }
 
 }  // namespace hsr
