@@ -5,6 +5,8 @@
 #pragma once
 #include "common.hpp"
 
+#include <mutex>
+#include <type_traits>
 #include <utility>
 
 namespace hsrpy {
@@ -15,10 +17,62 @@ struct Owner {
   virtual ~Owner() = default;
 };
 
-/// A Frame buffer moved out of its frame.
+/// Frame buffers whose arrays NumPy has freed, kept for the frames of the next single-view
+/// renders: a buffer new to the process costs page faults and the kernel's zeroing on every call
+/// (docs/benchmarks.md, "The Python module"). At most kMaxBuffers per type and kMaxBytes in all.
+class BufferPool {
+ public:
+  /// The one pool, never destroyed (arrays may outlive the module's static objects).
+  static BufferPool& instance() {
+    static BufferPool* pool = new BufferPool;
+    return *pool;
+  }
+  template <class T>
+  void give(hsr::FrameBuffer<T>&& buffer) {
+    const size_t bytes = buffer.capacity() * sizeof(T);
+    std::lock_guard lock(m_);
+    auto& kept = list<T>();
+    if (bytes == 0 || kept.size() >= kMaxBuffers || bytes_ + bytes > kMaxBytes) return;  // freed by the caller
+    bytes_ += bytes;
+    kept.push_back(std::move(buffer));
+  }
+  /// A kept buffer with room for n elements (the smallest such), or an empty one.
+  template <class T>
+  hsr::FrameBuffer<T> take(size_t n) {
+    std::lock_guard lock(m_);
+    auto& kept = list<T>();
+    auto best = kept.end();
+    for (auto it = kept.begin(); it != kept.end(); ++it)
+      if (it->capacity() >= n && (best == kept.end() || it->capacity() < best->capacity())) best = it;
+    if (best == kept.end()) return {};
+    hsr::FrameBuffer<T> buffer = std::move(*best);
+    kept.erase(best);
+    bytes_ -= buffer.capacity() * sizeof(T);
+    return buffer;
+  }
+
+ private:
+  static constexpr size_t kMaxBuffers = 4, kMaxBytes = size_t(256) << 20;
+  template <class T>
+  std::vector<hsr::FrameBuffer<T>>& list() {
+    if constexpr (std::is_same_v<T, float>) return floats_;
+    else if constexpr (std::is_same_v<T, int32_t>) return ints_;
+    else return colors_;
+  }
+  std::mutex m_;
+  std::vector<hsr::FrameBuffer<float>> floats_;
+  std::vector<hsr::FrameBuffer<int32_t>> ints_;
+  std::vector<hsr::FrameBuffer<hsr::Rgba8>> colors_;
+  size_t bytes_ = 0;
+};
+
+/// A Frame buffer moved out of its frame; back to the pool when NumPy frees its array.
 template <class T>
 struct VectorOwner : Owner {
   explicit VectorOwner(hsr::FrameBuffer<T>&& v) : data(std::move(v)) {}
+  ~VectorOwner() override { BufferPool::instance().give(std::move(data)); }
+  VectorOwner(const VectorOwner&) = delete;
+  VectorOwner& operator=(const VectorOwner&) = delete;
   hsr::FrameBuffer<T> data;
 };
 

@@ -210,8 +210,20 @@ std::vector<py::ssize_t> shapeOf(Output o, std::vector<py::ssize_t> image) {
   return image;
 }
 
-py::dict renderOne(const SceneData& d, const hsr::Camera& camera, const hsr::RenderOptions& options, const Wanted& wanted) {
+// A frame whose buffers come from the pool where it has them (render() sizes them).
+hsr::Frame pooledFrame(const hsr::Camera& camera, hsr::FrameOutputs outputs) {
+  BufferPool& pool = BufferPool::instance();
+  const size_t n = size_t(camera.width) * size_t(camera.height);
   hsr::Frame frame;
+  frame.depth = pool.take<float>(n);
+  if (has(outputs, hsr::FrameOutputs::FaceIds)) frame.faceId = pool.take<int32_t>(n);
+  if (has(outputs, hsr::FrameOutputs::TriangleIds)) frame.triangleId = pool.take<int32_t>(n);
+  if (has(outputs, hsr::FrameOutputs::Color)) frame.color = pool.take<hsr::Rgba8>(n);
+  return frame;
+}
+
+py::dict renderOne(const SceneData& d, const hsr::Camera& camera, const hsr::RenderOptions& options, const Wanted& wanted) {
+  hsr::Frame frame = pooledFrame(camera, options.outputs);
   Wanted attributes = wanted;
   attributes[Depth] = attributes[FaceId] = attributes[TriangleId] = attributes[Color] = false;
   Blocks blocks;

@@ -82,3 +82,19 @@ def test_gil_is_released_while_rendering():
     # Had the render held the GIL, this loop would have stood still for the whole render.
     assert timing["render"] > 0.2
     assert longest_gap < 0.5 * timing["render"], (longest_gap, timing["render"])
+
+
+def test_freed_buffers_are_reused_and_kept_arrays_are_never_overwritten():
+    scene = hsr.load("builtin:cubes")
+    a_cam, b_cam = scene.default_camera(96, 64), hsr.Camera.look_at((0, 5, 1), (0, 0, 0), 96, 64)
+    first = hsr.render(scene, a_cam, outputs=ALL)
+    expected = {k: v.copy() for k, v in first.items()}
+    del first
+    gc.collect()
+    again = hsr.render(scene, a_cam, outputs=ALL)  # freed buffers, taken from the module's pool
+    check_zero_copy(again)
+    other = hsr.render(scene, b_cam, outputs=ALL)  # `again` is alive: its buffers are not reused
+    assert not any(np.shares_memory(again[k], other[k]) for k in ALL)
+    for k in ALL:
+        assert again[k].tobytes() == expected[k].tobytes(), k
+    assert not np.array_equal(other["face_id"], again["face_id"])
