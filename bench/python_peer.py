@@ -184,6 +184,7 @@ class GlRenderer:
         GL.glEnable(GL.GL_DEPTH_TEST)
         GL.glDepthFunc(GL.GL_GREATER)
         self.size = None
+        self.draw_read_s = 0.0  # time in render() before linearisation, summed (the GL work alone)
 
     def _program(self):
         GL = self.GL
@@ -226,6 +227,7 @@ class GlRenderer:
     def render(self, m):
         """One view (m: Camera.resolve): eye depth (float32, +inf empty) and face ids (int32, -1)."""
         GL = self.GL
+        start = time.perf_counter()
         width, height = m["width"], m["height"]
         self._framebuffer(width, height)
         GL.glUniformMatrix4fv(self.location, 1, GL.GL_TRUE, clip_from_world(m, self.zero_to_one).astype(np.float32))
@@ -236,6 +238,7 @@ class GlRenderer:
         GL.glReadPixels(0, 0, width, height, GL.GL_RED_INTEGER, GL.GL_UNSIGNED_INT, ids)
         window = np.empty((height, width), np.float32)
         GL.glReadPixels(0, 0, width, height, GL.GL_DEPTH_COMPONENT, GL.GL_FLOAT, window)
+        self.draw_read_s += time.perf_counter() - start
         return eye_depth(m, window[::-1]), ids[::-1].view(np.int32)
 
 
@@ -306,24 +309,26 @@ def measure(hsr, gl, scene, cams, threads, frames):
     batch = isinstance(cams, list)
     views = cams if batch else [cams]
     resolved = [c.resolve(scene) for c in views]
-    hsr_ms, gl_ms = [], []
+    hsr_ms, gl_ms, gl_draw_ms = [], [], []
     for rep in range(frames + 1):  # the first repetition warms both up, untimed
         t0 = time.perf_counter()
         out = hsr.render(scene, cams, outputs=("depth", "face_id"), threads=threads)
         t1 = time.perf_counter()
         time.sleep(0.001)  # hsr's pool threads stop spinning (kPoolSpin) before llvmpipe's turn
+        gl.draw_read_s = 0.0
         t2 = time.perf_counter()
         gl_out = [gl.render(m) for m in resolved]
         t3 = time.perf_counter()
         if rep:
             hsr_ms.append(1e3 * (t1 - t0))
             gl_ms.append(1e3 * (t3 - t2))
+            gl_draw_ms.append(1e3 * gl.draw_read_s)
     agreement = Agreement()
     for i, (gl_depth, gl_ids) in enumerate(gl_out):
         h_ids = out["face_id"][i] if batch else out["face_id"]
         h_depth = out["depth"][i] if batch else out["depth"]
         agreement.add(h_ids, h_depth, gl_ids, gl_depth)
-    return statistics.median(hsr_ms), statistics.median(gl_ms), agreement
+    return statistics.median(hsr_ms), statistics.median(gl_ms), agreement, statistics.median(gl_draw_ms)
 
 
 def batch_memory(hsr, scene, cams, threads):
@@ -347,8 +352,8 @@ def main():
     one_w, one_h = size_of(args.size)
     batch_w, batch_h = size_of(args.batch_size)
     if args.markdown:
-        print(f"| scene | triangles | 1 view {args.size}: hsr ms | GL ms | ratio | ids equal % | non-edge mismatches "
-              f"| depth max rel (pixels > 1e-5) | {args.views} views {args.batch_size}: hsr ms | GL ms | ratio | ids equal % "
+        print(f"| scene | triangles | 1 view {args.size}: hsr ms | GL ms (draw + read) | ratio | ids equal % | non-edge mismatches "
+              f"| depth max rel (pixels > 1e-5) | {args.views} views {args.batch_size}: hsr ms | GL ms (draw + read) | ratio | ids equal % "
               f"| non-edge mismatches | depth max rel (pixels > 1e-5) | batch RSS growth / outputs MB |")
         print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for name in args.scenes:
@@ -360,21 +365,24 @@ def main():
         grown, outputs = batch_memory(hsr, scene, cams, args.threads)
         row = {"scene": name, "triangles": scene.triangle_count, "threads": args.threads, "platform": platform[0],
                "gl_renderer": renderer,
-               "one": {"size": args.size, "hsr_ms": one[0], "gl_ms": one[1], "ratio": one[1] / one[0], **one[2].as_dict()},
+               "one": {"size": args.size, "hsr_ms": one[0], "gl_ms": one[1], "ratio": one[1] / one[0],
+                       "gl_draw_read_ms": one[3], **one[2].as_dict()},
                "batch": {"views": args.views, "size": args.batch_size, "hsr_ms": many[0], "gl_ms": many[1],
+                         "gl_draw_read_ms": many[3],
                          "ratio": many[1] / many[0], **many[2].as_dict(), "rss_growth_mb": grown, "outputs_mb": outputs}}
         if args.json:
             print(json.dumps(row))
         elif args.markdown:
             o, b = row["one"], row["batch"]
             short = os.path.basename(name)
-            print(f"| `{short}` | {row['triangles']} | {o['hsr_ms']:.1f} | {o['gl_ms']:.1f} | {o['ratio']:.1f} "
+            print(f"| `{short}` | {row['triangles']} | {o['hsr_ms']:.1f} | {o['gl_ms']:.1f} ({o['gl_draw_read_ms']:.1f}) | {o['ratio']:.1f} "
                   f"| {100 * o['equal'] / max(1, o['covered']):.3f} | {o['non_edge_mismatches']} | {o['depth_max_rel']:.1e} ({o['depth_over_1e-5']}) "
-                  f"| {b['hsr_ms']:.0f} | {b['gl_ms']:.0f} | {b['ratio']:.1f} | {100 * b['equal'] / max(1, b['covered']):.3f} "
+                  f"| {b['hsr_ms']:.0f} | {b['gl_ms']:.0f} ({b['gl_draw_read_ms']:.0f}) | {b['ratio']:.1f} | {100 * b['equal'] / max(1, b['covered']):.3f} "
                   f"| {b['non_edge_mismatches']} | {b['depth_max_rel']:.1e} ({b['depth_over_1e-5']}) | {grown:.0f} / {outputs:.0f} |")
         else:
             for label, r in (("1 view " + args.size, row["one"]), (f"{args.views} views {args.batch_size}", row["batch"])):
-                print(f"{name}, {label}: hsr {r['hsr_ms']:.1f} ms, GL {r['gl_ms']:.1f} ms, ratio {r['ratio']:.1f}; ids "
+                print(f"{name}, {label}: hsr {r['hsr_ms']:.1f} ms, GL {r['gl_ms']:.1f} ms ({r['gl_draw_read_ms']:.1f} drawing and "
+                      f"reading back), ratio {r['ratio']:.1f}; ids "
                       f"{r['equal']}/{r['covered']} equal, {r['edge_mismatches']} edge and {r['non_edge_mismatches']} "
                       f"non-edge mismatches; depth max rel {r['depth_max_rel']:.2e} ({r['depth_over_1e-5']} pixels over 1e-5)")
         sys.stdout.flush()
