@@ -23,6 +23,7 @@ struct SceneData {
   hsr::Scene scene;
   std::vector<int32_t> meshInstance;  // per mesh (Scene::meshes)
   std::vector<int32_t> faceInstance;  // per face
+  hsr::Bounds3 bounds;                // scene.bounds(), computed once (cameras fit near/far to it)
   /// The unit normals of Scene::triangles (hsr::triangleNormals), computed once.
   const std::vector<glm::vec3>& normals() const;
 
@@ -37,8 +38,8 @@ std::shared_ptr<SceneData> makeSceneData(hsr::Scene&& scene, std::vector<int32_t
 struct PyCamera {
   hsr::CameraSpec spec;
   int width = 0, height = 0;
-  hsr::Camera resolve(const hsr::Scene& scene, const std::string& name) const {
-    return hsr::resolveCamera(spec, width, height, scene.bounds(), name);
+  hsr::Camera resolve(const SceneData& scene, const std::string& name) const {
+    return hsr::resolveCamera(spec, width, height, scene.bounds, name);
   }
 };
 

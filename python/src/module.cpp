@@ -40,8 +40,8 @@ py::list meshesOf(const SceneData& d) {
   return out;
 }
 
-py::object boundsOf(const hsr::Scene& scene) {
-  const hsr::Bounds3 b = scene.bounds();
+py::object boundsOf(const SceneData& d) {
+  const hsr::Bounds3& b = d.bounds;
   if (b.empty()) return py::none();
   const double v[6] = {b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z};
   return copyArray(v, {2, 3});
@@ -64,7 +64,7 @@ py::array trianglesOf(const hsr::Scene& scene, bool faces) {
 PyCamera defaultCamera(const SceneData& d, int width, int height) {
   checkImageSize(width, height);
   PyCamera c;
-  c.spec = d.scene.camera ? *d.scene.camera : hsr::frameBounds(d.scene.bounds());
+  c.spec = d.scene.camera ? *d.scene.camera : hsr::frameBounds(d.bounds);
   c.width = width;
   c.height = height;
   return c;
@@ -126,7 +126,7 @@ py::array rowMajor(const hsr::dmat4& m) {
 
 // The camera as hsr renders `scene` with it: its pose, projection and clipping planes.
 py::dict resolvedCamera(const PyCamera& c, const SceneData& d) {
-  const hsr::Camera cam = c.resolve(d.scene, "camera");
+  const hsr::Camera cam = c.resolve(d, "camera");
   py::dict out;
   out["camera_from_world"] = rowMajor(cam.cameraFromWorld);
   out["pixel_from_camera"] = rowMajor(cam.pixelFromCamera);
@@ -172,7 +172,7 @@ Raises ValueError for bad dtypes, shapes, non-finite coordinates, indices out of
           "face_instance_ids",
           [](const SceneData& d) { return copyArray(d.faceInstance.data(), {py::ssize_t(d.faceInstance.size())}); },
           "The instance id of each face (int32): what render's instance_id shows.")
-      .def_property_readonly("bounds", [](const SceneData& d) { return boundsOf(d.scene); },
+      .def_property_readonly("bounds", [](const SceneData& d) { return boundsOf(d); },
                              "[[xmin, ymin, zmin], [xmax, ymax, zmax]] of the vertices faces use (None: empty).")
       .def_property_readonly(
           "vertices",

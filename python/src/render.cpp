@@ -128,7 +128,7 @@ std::vector<hsr::Camera> camerasOf(const SceneData& data, py::handle cameras, bo
   std::vector<hsr::Camera> out;
   batch = !py::isinstance<PyCamera>(cameras);
   if (!batch) {
-    out.push_back(cameras.cast<const PyCamera&>().resolve(data.scene, "camera"));
+    out.push_back(cameras.cast<const PyCamera&>().resolve(data, "camera"));
     return out;
   }
   if (!py::isinstance<py::sequence>(cameras) || py::isinstance<py::str>(cameras))
@@ -138,7 +138,7 @@ std::vector<hsr::Camera> camerasOf(const SceneData& data, py::handle cameras, bo
   for (size_t i = 0; i < list.size(); ++i) {
     const std::string name = "cameras[" + std::to_string(i) + "]";
     if (!py::isinstance<PyCamera>(list[i])) valueError(name + ": not an hsr.Camera");
-    out.push_back(list[i].cast<const PyCamera&>().resolve(data.scene, name));
+    out.push_back(list[i].cast<const PyCamera&>().resolve(data, name));
     if (out[i].width != out[0].width || out[i].height != out[0].height)
       valueError(name + ": " + std::to_string(out[i].width) + "x" + std::to_string(out[i].height) + ", but cameras[0] is " +
                  std::to_string(out[0].width) + "x" + std::to_string(out[0].height) + ": a batch has one image size");

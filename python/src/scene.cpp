@@ -19,6 +19,7 @@ const std::vector<glm::vec3>& SceneData::normals() const {
 std::shared_ptr<SceneData> makeSceneData(hsr::Scene&& scene, std::vector<int32_t> instances) {
   auto data = std::make_shared<SceneData>();
   data->scene = std::move(scene);
+  data->bounds = data->scene.bounds();
   const size_t meshes = data->scene.meshes.size();
   if (instances.empty())
     for (size_t m = 0; m < meshes; ++m) instances.push_back(int32_t(m));
