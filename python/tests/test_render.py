@@ -185,3 +185,13 @@ def test_cli_instance_ids_and_barycentrics_are_the_modules(tmp_path, cli):
     assert status == 2 and "no triangle ids" in err
     status, err = cli("render", "builtin:cubes", "--barycentric", tmp_path / "b.png")
     assert status == 2 and "written as .npy" in err
+
+
+@pytest.mark.parametrize("algorithm", hsr.algorithms())
+def test_every_algorithm_gives_triangle_ids_of_its_faces(cubes, algorithm):
+    out = hsr.render(cubes, cubes.default_camera(120, 90), outputs=("face_id", "triangle_id", "barycentric"),
+                     algorithm=algorithm)
+    t, f = out["triangle_id"], out["face_id"]
+    assert (t < cubes.triangle_count).all()
+    assert np.array_equal(np.where(t >= 0, cubes.triangle_faces[np.maximum(t, 0)], -1), f)
+    assert np.allclose(out["barycentric"][t >= 0].sum(axis=1), 1.0, atol=1e-5)

@@ -105,7 +105,7 @@ void resolveBarycentrics(const Scene& scene, const Camera& camera, const Frame& 
       float* b = out + 3 * i;
       const int32_t t = frame.triangleId[i];
       b[0] = b[1] = b[2] = 0.0f;
-      if (t < 0) continue;
+      if (t < 0 || size_t(t) >= scene.triangles.size()) continue;  // background (or not a triangle of the scene)
       // Ray o + s dir through the pixel centre, in camera space, against the triangle's plane:
       // o + s dir = a + u (p1 - a) + v (p2 - a) (Moeller-Trumbore), all in double.
       const Triangle& tri = scene.triangles[size_t(t)];
