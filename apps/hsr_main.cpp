@@ -309,6 +309,7 @@ using Runner = std::function<int()>;
 struct RenderFlags {
   ViewFlags view;
   std::string out, ids, depth, depthImage, overdrawImage, stats;
+  std::string instanceIds, barycentric;  // attributes resolved from the ids (hsr/views.hpp)
   bool verify = false, quiet = false, json = false;
 };
 
@@ -332,6 +333,33 @@ void printSummary(const Job& job, const hsr::Stats& s, double wallMs, const std:
   if (s.wrong_pixels)
     fmt::print("  verify: {} wrong pixels, {} ambiguous\n", *s.wrong_pixels, s.ambiguous_pixels.value_or(0));
   if (!written.empty()) fmt::print("  wrote {}\n", fmt::join(written, ", "));
+}
+
+// --instance-ids and --barycentric: their file names, and the ids they are resolved from.
+void checkAttributeOutputs(const RenderFlags& f, hsr::FrameOutputs kept) {
+  if (!f.instanceIds.empty()) {
+    hsr::checkInstanceIdsPath(f.instanceIds);
+    if (!has(kept, hsr::FrameOutputs::FaceIds))
+      throw InputError("--instance-ids: the outputs kept (" + hsr::frameOutputsName(kept) + ") have no face ids (add face)");
+  }
+  if (!f.barycentric.empty()) {
+    hsr::checkBarycentricsPath(f.barycentric);
+    if (!has(kept, hsr::FrameOutputs::TriangleIds))
+      throw InputError("--barycentric: the outputs kept (" + hsr::frameOutputsName(kept) +
+                       ") have no triangle ids (add triangle)");
+  }
+}
+
+void writeAttributeOutputs(const RenderFlags& f, const Job& job, const hsr::Frame& frame,
+                           std::vector<std::string>& written) {
+  if (!f.instanceIds.empty()) {
+    hsr::writeInstanceIds(frame, hsr::faceMeshIndices(job.scene), f.instanceIds);
+    written.push_back(f.instanceIds);
+  }
+  if (!f.barycentric.empty()) {
+    hsr::writeBarycentrics(job.scene, job.camera, frame, f.barycentric);
+    written.push_back(f.barycentric);
+  }
 }
 
 int runRender(const RenderFlags& f) {
@@ -358,6 +386,7 @@ int runRender(const RenderFlags& f) {
     throw InputError("--ids: --outputs " + f.view.outputs + " keeps no face ids (add face)");
   if (f.verify && !has(kept, hsr::FrameOutputs::IdsAndDepth))
     throw InputError("--verify compares face and triangle ids: --outputs " + f.view.outputs + " lacks face or triangle");
+  checkAttributeOutputs(f, kept);
 
   Job job = f.view.prepare();
   job.options.verify = f.verify;
@@ -372,6 +401,7 @@ int runRender(const RenderFlags& f) {
     o.write(frame, o.path);
     written.push_back(o.path);
   }
+  writeAttributeOutputs(f, job, frame, written);
   const std::string statsJson = frame.stats.toJson();
   if (!f.stats.empty()) {
     hsr::writeTextFile(statsJson + "\n", f.stats);
@@ -403,6 +433,16 @@ Runner setupRender(CLI::App& cmd) {
                  "Fragments written per pixel, on a fixed colour scale: black 0, blue 1, green 2, yellow 3, orange "
                  "4, red 5, magenta 6, white 7 or more")
       ->type_name("OVERDRAW.png")
+      ->group(outputs);
+  cmd.add_option("--instance-ids", f->instanceIds,
+                 "Instance ids: per pixel the mesh its face belongs to (its position among the scene's meshes, as "
+                 "'hsr info' lists them); PNG (24-bit id+1, 0 = background) or .npy (int32, -1)")
+      ->type_name("INST.png|.npy")
+      ->group(outputs);
+  cmd.add_option("--barycentric", f->barycentric,
+                 "Barycentric coordinates of each pixel centre on the visible triangle, float32 (H, W, 3), 0 on the "
+                 "background; for a triangle face, of its vertices in file order (--ids names the face)")
+      ->type_name("BARY.npy")
       ->group(outputs);
   cmd.add_option("--stats", f->stats, "Statistics JSON")->type_name("STATS.json")->group(outputs);
   cmd.add_flag("--verify", f->verify, "Also render the exact reference and count wrong/ambiguous pixels");

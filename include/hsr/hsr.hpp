@@ -13,3 +13,4 @@
 #include <hsr/orbit.hpp>
 #include <hsr/occlusion.hpp>
 #include <hsr/precision.hpp>
+#include <hsr/views.hpp>
