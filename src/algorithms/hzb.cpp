@@ -1,0 +1,290 @@
+// The hierarchical z-buffer of Greene, Kass and Miller (1993), written to be read: a z-buffer
+// with a z-pyramid over it, so that a triangle hidden behind what is already drawn is rejected
+// with a few comparisons instead of one per pixel.
+//
+//   the z-pyramid: level 0 has one entry per 8x8 tile of the image; each level above has one
+//   entry per 2x2 entries of the level below (the last row or column of an odd-sized level
+//   folds one entry, not two), up to a single entry; every entry holds the FARTHEST stored
+//   depth of the pixels below it.
+//
+//   for each triangle (nearest faces first, by default):
+//     find the smallest entry whose region contains the triangle's screen box
+//     visit(entry):
+//       if the triangle's nearest depth within the entry is not nearer than the entry: rejected
+//       (every pixel below holds something at least as near, and the test keeps ties)
+//       else, on level 0: draw the triangle's pixels in the tile with the per-pixel depth test;
+//             above: visit each child entry that the screen box meets (descended)
+//     after a tile's pixels changed, its entry and those above it are made exact again
+//
+// Updates are exact: when a write replaced a pixel that held the tile's farthest value, the
+// tile's entry is recomputed from its 64 pixels and each entry above from its children, up to
+// the first that does not change. An entry is never nearer than a pixel below it, so a rejection
+// is never wrong: the image is the z-buffer's, bit for bit, except where two fragments tie in
+// depth (the order decides which stays: ambiguous, as for every reordering z-buffer).
+//
+// The triangle's nearest depth within an entry is the farther of two conservative bounds: its
+// nearest over the whole triangle (Greene's polygon z), and its depth plane's nearest over the
+// part of its screen box inside the entry (a large triangle, a floor or a wall, is far nearer at
+// one end than where it passes behind an occluder).
+#include <array>
+#include <string>
+
+#include "algorithms/algorithms.hpp"
+#include "algorithms/draw.hpp"
+#include "algorithms/sort_keys.hpp"
+#include "algorithms/zbuffer_pixels.hpp"
+#include "core/shading.hpp"
+#include "core/parallel.hpp"
+#include "core/timer.hpp"
+#include "raster/halfspace.hpp"
+
+namespace hsr::algo {
+namespace {
+
+constexpr int kTileShift = 3;  // level 0's entries are 8x8 pixel tiles
+constexpr int kMaxLevels = 16;  // 16384 pixels / 8 = 2^11: 12 levels at most
+
+// The pyramid of farthest depths (see the top of the file), for stored values of type T and the
+// depth test's order.
+template <DepthStorage S, DepthMapping M>
+class ZPyramid {
+ public:
+  using Pixels = ZBufferPixels<S, M>;
+  using T = typename Pixels::T;
+
+  ZPyramid(int width, int height, T clear) {
+    int w = (width + (1 << kTileShift) - 1) >> kTileShift, h = (height + (1 << kTileShift) - 1) >> kTileShift;
+    for (;;) {
+      levels_.push_back({w, h, std::vector<T>(size_t(w) * size_t(h), clear)});
+      if (w == 1 && h == 1) break;
+      w = (w + 1) / 2;
+      h = (h + 1) / 2;
+    }
+  }
+
+  int levels() const { return int(levels_.size()); }
+  int width(int k) const { return levels_[size_t(k)].width; }
+  int height(int k) const { return levels_[size_t(k)].height; }
+  /// The side in pixels of level k's entries' regions: 8, 16, 32, ...
+  static int shift(int k) { return kTileShift + k; }
+  T at(int k, int x, int y) const { return levels_[size_t(k)].farthest[size_t(y) * size_t(width(k)) + size_t(x)]; }
+
+  /// Tile (tx, ty)'s entry set to `farthest` (its pixels' farthest value), and every entry above
+  /// it recomputed from its children, up to the first that does not change.
+  void update(int tx, int ty, T farthest) {
+    set(0, tx, ty, farthest);
+    for (int k = 1; k < levels(); ++k) {
+      tx /= 2;
+      ty /= 2;
+      T f = at(k - 1, 2 * tx, 2 * ty);
+      const int cx1 = std::min(2 * tx + 1, width(k - 1) - 1), cy1 = std::min(2 * ty + 1, height(k - 1) - 1);
+      for (int cy = 2 * ty; cy <= cy1; ++cy)
+        for (int cx = 2 * tx; cx <= cx1; ++cx) f = Pixels::farthest(f, at(k - 1, cx, cy));
+      if (f == at(k, tx, ty)) return;
+      set(k, tx, ty, f);
+    }
+  }
+
+  uint64_t bytes() const {
+    uint64_t b = 0;
+    for (const Level& l : levels_) b += l.farthest.size() * sizeof(T);
+    return b;
+  }
+
+ private:
+  struct Level {
+    int width, height;
+    std::vector<T> farthest;
+  };
+  void set(int k, int x, int y, T v) { levels_[size_t(k)].farthest[size_t(y) * size_t(width(k)) + size_t(x)] = v; }
+  std::vector<Level> levels_;
+};
+
+/// What happened at the entries of one level of the pyramid.
+struct LevelCounts {
+  uint64_t tested = 0;     // entries a triangle was tested against
+  uint64_t rejected = 0;   // ... where it was hidden
+  uint64_t descended = 0;  // ... where it was not: its children visited (level 0: its pixels drawn)
+};
+
+// An inclusive pixel rectangle.
+struct Rect {
+  int x0, y0, x1, y1;
+};
+
+// The z-buffer, its pyramid and the triangles drawn through them, for one depth format.
+template <DepthStorage S, DepthMapping M>
+class HierarchicalZBuffer {
+ public:
+  using Pixels = ZBufferPixels<S, M>;
+  using T = typename Pixels::T;
+
+  HierarchicalZBuffer(std::span<const SetupTriangle> tris, const Camera& camera, const RenderOptions& options,
+                      Frame& frame)
+      : tris_(tris), camera_(camera), pixels_(camera, options, frame),
+        pyramid_(camera.width, camera.height, pixels_.clearValue()), depth_(pixels_.depthSetup()) {}
+
+  void drawAll(DrawCounters& n) {
+    for (uint32_t i = 0; i < tris_.size(); ++i) draw(i, n);
+  }
+  void resolve(const TriangleShader& shade, DrawCounters& n) { pixels_.resolve(tris_, shade, n); }
+  const std::array<LevelCounts, kMaxLevels>& counts() const { return counts_; }
+  int levels() const { return pyramid_.levels(); }
+  uint64_t bytes() const { return pixels_.bytes() + pyramid_.bytes(); }
+
+ private:
+  // Triangle i, from the smallest entry that contains its screen box.
+  void draw(uint32_t i, DrawCounters& n) {
+    const SetupTriangle& t = tris_[i];
+    current_ = {i, pixels_.planes(t), nearestStored<S, M>(t, depth_), 0, 0, {t.minX, t.minY, t.maxX, t.maxY}};
+    current_.pErr = planeError(current_.m.p, camera_.width, camera_.height);
+    current_.qErr = planeError(current_.m.q, camera_.width, camera_.height);
+    int k = 0;
+    while (k + 1 < pyramid_.levels() && !inOneEntry(current_.box, k)) ++k;
+    visit(k, current_.box.x0 >> ZPyramid<S, M>::shift(k), current_.box.y0 >> ZPyramid<S, M>::shift(k), n);
+  }
+
+  static bool inOneEntry(const Rect& r, int k) {
+    const int s = ZPyramid<S, M>::shift(k);
+    return (r.x0 >> s) == (r.x1 >> s) && (r.y0 >> s) == (r.y1 >> s);
+  }
+
+  // The current triangle against entry (x, y) of level k (its region meets the screen box).
+  void visit(int k, int x, int y, DrawCounters& n) {
+    const int s = ZPyramid<S, M>::shift(k);
+    const Rect part{std::max(x << s, current_.box.x0), std::max(y << s, current_.box.y0),
+                    std::min(((x + 1) << s) - 1, current_.box.x1), std::min(((y + 1) << s) - 1, current_.box.y1)};
+    LevelCounts& c = counts_[size_t(k)];
+    ++c.tested;
+    if (!storedNearer<M>(nearestWithin(part), double(pyramid_.at(k, x, y)))) {
+      ++c.rejected;
+      return;
+    }
+    ++c.descended;
+    if (k == 0) return drawTile(x, y, part, n);
+    const int cx1 = std::min(2 * x + 1, pyramid_.width(k - 1) - 1), cy1 = std::min(2 * y + 1, pyramid_.height(k - 1) - 1);
+    const int cs = ZPyramid<S, M>::shift(k - 1);
+    for (int cy = 2 * y; cy <= cy1; ++cy)
+      for (int cx = 2 * x; cx <= cx1; ++cx)
+        if ((cx << cs) <= part.x1 && ((cx + 1) << cs) > part.x0 && (cy << cs) <= part.y1 && ((cy + 1) << cs) > part.y0)
+          visit(k - 1, cx, cy, n);
+  }
+
+  // A stored value no fragment of the current triangle inside `part` is nearer than.
+  double nearestWithin(const Rect& part) const {
+    const StoredRange plane = storedRangeOverRect<S, M>(current_.m, current_.pErr, current_.qErr, part.x0 + 0.5,
+                                                        part.x1 + 0.5, part.y0 + 0.5, part.y1 + 0.5);
+    return storedNearer<M>(plane.nearest, current_.nearest) ? current_.nearest : plane.nearest;
+  }
+
+  // The current triangle's pixels in tile (tx, ty), clipped to `part`, through the depth test;
+  // the tile's entry made exact again if a pixel that held its farthest value was replaced.
+  void drawTile(int tx, int ty, const Rect& part, DrawCounters& n) {
+    SetupTriangle clipped = tris_[current_.i];
+    clipped.minX = int16_t(part.x0);
+    clipped.minY = int16_t(part.y0);
+    clipped.maxX = int16_t(part.x1);
+    clipped.maxY = int16_t(part.y1);
+    const T tileFarthest = pyramid_.at(0, tx, ty);
+    bool stale = false;
+    rasterizeHalfSpace(clipped, [&](int x, int y, double) {
+      const size_t idx = size_t(y) * size_t(camera_.width) + size_t(x);
+      const T before = pixels_.at(idx);
+      if (pixels_.test(idx, Pixels::fragment(current_.m, x, y), current_.i, n)) stale |= before == tileFarthest;
+    });
+    if (stale) pyramid_.update(tx, ty, farthestOfTile(tx, ty));
+  }
+
+  T farthestOfTile(int tx, int ty) const {
+    constexpr int side = 1 << kTileShift;
+    const int x1 = std::min((tx + 1) * side, camera_.width), y1 = std::min((ty + 1) * side, camera_.height);
+    T f = pixels_.at(size_t(ty * side) * size_t(camera_.width) + size_t(tx * side));
+    for (int y = ty * side; y < y1; ++y)
+      for (int x = tx * side; x < x1; ++x) f = Pixels::farthest(f, pixels_.at(size_t(y) * size_t(camera_.width) + size_t(x)));
+    return f;
+  }
+
+  // The triangle being drawn: its index, depth planes, nearest stored value over the whole
+  // triangle, the planes' evaluation errors, its screen box.
+  struct Current {
+    uint32_t i;
+    MappedPlanes m;
+    double nearest;
+    double pErr, qErr;
+    Rect box;
+  };
+
+  std::span<const SetupTriangle> tris_;
+  const Camera& camera_;
+  Pixels pixels_;
+  ZPyramid<S, M> pyramid_;
+  const DepthSetup depth_;
+  Current current_{};
+  std::array<LevelCounts, kMaxLevels> counts_{};
+};
+
+// "level0_tested", "level0_rejected", "level0_descended", ...: the details' keys (static storage,
+// as Stats::details requires), made once.
+const std::string& levelKey(int k, int what) {
+  static const std::array<std::array<std::string, 3>, kMaxLevels> keys = [] {
+    std::array<std::array<std::string, 3>, kMaxLevels> out;
+    for (int level = 0; level < kMaxLevels; ++level)
+      for (int w = 0; w < 3; ++w)
+        out[size_t(level)][size_t(w)] =
+            "level" + std::to_string(level) + (w == 0 ? "_tested" : w == 1 ? "_rejected" : "_descended");
+    return out;
+  }();
+  return keys[size_t(k)][size_t(what)];
+}
+
+void hzb(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
+         Frame& frame) {
+  Timer timer;
+  Stats& st = frame.stats;
+  const TriangleShader shade(scene, camera, options.shading);
+  FrontEndOutput fe;
+  runFrontEnd(scene, camera, options, fe);
+  std::vector<SetupTriangle> triangles = fe.flatten();
+  st.addTime("frontend", timer.lap());
+  const bool frontToBack = params.text("order") == "front-to-back";
+  if (frontToBack) {
+    byFaceRank(faceRanks(faceKeys(scene, camera, SortKey::Min), /*backToFront=*/false))(triangles);
+    st.addTime("order", timer.lap());
+  }
+  frame.clear(options.background, resolveThreads(options.threads));
+  DrawCounters n;
+  visitDepthFormat(options.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
+    HierarchicalZBuffer<S, M> hz(triangles, camera, options, frame);
+    hz.drawAll(n);
+    hz.resolve(shade, n);
+    st.addTime("raster", timer.lap());
+    recordZBufferStats(st, fe, triangles, n, hz.bytes(), options, frame);
+    st.setDetail("levels", uint64_t(hz.levels()));
+    for (int k = 0; k < hz.levels(); ++k) {
+      const LevelCounts& c = hz.counts()[size_t(k)];
+      st.setDetail(levelKey(k, 0), c.tested);
+      st.setDetail(levelKey(k, 1), c.rejected);
+      st.setDetail(levelKey(k, 2), c.descended);
+    }
+  });
+  st.setDetail("order", params.text("order"));
+  st.setDetail("pyramid_updates", "exact");
+}
+
+}  // namespace
+
+AlgorithmInfo hzbAlgorithm() {
+  AlgorithmInfo a;
+  a.name = "hzb";
+  a.summary = "hierarchical z-buffer: a z-pyramid of farthest depths rejects hidden triangles before their pixels";
+  a.source = "Ukrainian paper (the hierarchical z-buffer of Greene, Kass and Miller, 1993)";
+  a.params = {{"order", ParamType::Choice, "front-to-back", {"front-to-back", "submission"}, -1e300, 1e300,
+               "the order triangles are drawn in: faces by their nearest vertex, nearest first (what the pyramid "
+               "rejects most with), or as submitted"}};
+  a.guarantee.kind = Guarantee::Kind::Exact;
+  a.guarantee.condition = "a z-buffer in any order; ties of equal depth are ambiguous";
+  a.run = hzb;
+  return a;
+}
+
+}  // namespace hsr::algo
