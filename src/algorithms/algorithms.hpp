@@ -19,6 +19,7 @@ AlgorithmInfo painterAlgorithm();         // painter.cpp
 AlgorithmInfo reversePainterAlgorithm();  // reverse_painter.cpp
 AlgorithmInfo sortedZbufferAlgorithm();   // sorted_zbuffer.cpp
 AlgorithmInfo hzbAlgorithm();             // hzb.cpp: Greene's hierarchical z-buffer
+AlgorithmInfo midpointAlgorithm();        // midpoint.cpp: the Ukrainian paper's midpoint subdivision
 
 /// The scene's BSP tree (built once per scene and options, bsp.cpp) drawn in its order from the
 /// camera, back to front or front to back, under `rule`; fills the statistics and the tree's
