@@ -279,7 +279,7 @@ AlgorithmInfo midpointAlgorithm() {
   a.source = "Ukrainian paper";
   a.params = {{"initial-splits", ParamType::Int, "2", {}, 0, 8,
                "times every triangle is split in three before its parts are first tested (the paper: 2)"},
-              {"max-depth", ParamType::Int, "6", {}, 0, kMaxSplitDepth,
+              {"max-depth", ParamType::Int, "4", {}, 0, kMaxSplitDepth,
                "splits after which an undecided part is drawn with a depth test at every pixel (at least "
                "initial-splits)"}};
   a.guarantee.kind = Guarantee::Kind::Approximate;
