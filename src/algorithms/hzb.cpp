@@ -130,6 +130,7 @@ class HierarchicalZBuffer {
   void resolve(const TriangleShader& shade, DrawCounters& n) { pixels_.resolve(tris_, shade, n); }
   const std::array<LevelCounts, kMaxLevels>& counts() const { return counts_; }
   int levels() const { return pyramid_.levels(); }
+  uint64_t trianglesRejected() const { return hidden_; }
   uint64_t bytes() const { return pixels_.bytes() + pyramid_.bytes(); }
 
  private:
@@ -141,7 +142,9 @@ class HierarchicalZBuffer {
     current_.qErr = planeError(current_.m.q, camera_.width, camera_.height);
     int k = 0;
     while (k + 1 < pyramid_.levels() && !inOneEntry(current_.box, k)) ++k;
+    const uint64_t tilesBefore = counts_[0].descended;
     visit(k, current_.box.x0 >> ZPyramid<S, M>::shift(k), current_.box.y0 >> ZPyramid<S, M>::shift(k), n);
+    hidden_ += counts_[0].descended == tilesBefore;  // no pixel of it tested
   }
 
   static bool inOneEntry(const Rect& r, int k) {
@@ -221,6 +224,7 @@ class HierarchicalZBuffer {
   const DepthSetup depth_;
   Current current_{};
   std::array<LevelCounts, kMaxLevels> counts_{};
+  uint64_t hidden_ = 0;  // triangles rejected in every tile they meet
 };
 
 // "level0_tested", "level0_rejected", "level0_descended", ...: the details' keys (static storage,
@@ -260,6 +264,8 @@ void hzb(const Scene& scene, const Camera& camera, const RenderOptions& options,
     st.addTime("raster", timer.lap());
     recordZBufferStats(st, fe, triangles, n, hz.bytes(), options, frame);
     st.setDetail("levels", uint64_t(hz.levels()));
+    st.setDetail("triangles_drawn", uint64_t(triangles.size()));
+    st.setDetail("triangles_rejected", hz.trianglesRejected());
     for (int k = 0; k < hz.levels(); ++k) {
       const LevelCounts& c = hz.counts()[size_t(k)];
       st.setDetail(levelKey(k, 0), c.tested);
