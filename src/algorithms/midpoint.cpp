@@ -60,7 +60,7 @@ struct Part {
 // What the tests decided, counted.
 struct MidpointCounts {
   uint64_t pointComparisons = 0;  // vertices and midpoints compared with the z-buffer
-  uint64_t pixelTests = 0;        // per-pixel depth tests of parts at the limit
+  uint64_t pixelTests = 0;        // per-pixel depth tests (parts at the limit or with no point tested)
   uint64_t parts = 0;             // parts tested
   uint64_t invisible = 0;         // ... all behind: dropped
   uint64_t drawnUntested = 0;     // ... all in front: drawn without per-pixel tests
