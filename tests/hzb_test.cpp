@@ -5,6 +5,7 @@
 
 #include <hsr/hsr.hpp>
 
+#include <set>
 #include <string>
 
 namespace hsr {
@@ -87,6 +88,38 @@ TEST(Hzb, LevelCountersAddUp) {
   EXPECT_GT(f.stats.depth_tests, detail(f.stats, "level0_descended"));
   EXPECT_GT(rejected, 0u);  // the city hides much
   EXPECT_EQ(f.stats.detailText("pyramid_updates"), "exact");
+}
+
+// Occlusion culling (occlusion-cull=on) on hzb and on the textbook z-buffer: the same image as
+// without, meshes dropped whole before set-up, and most of the city's hidden triangles among them.
+TEST(Hzb, OcclusionCullingIsExactAndCullsMostOfTheCitysHiddenTriangles) {
+  const Scene city = loadScene("builtin:city");
+  const Frame plain = renderWith(city, "hzb", {}, 640, 360);
+  const Frame culled = renderWith(city, "hzb", {{"occlusion-cull", "on"}}, 640, 360);
+  const Frame textbook = renderWith(city, "zbuffer", {{"raster", "halfspace"}}, 640, 360, false);
+  const Frame textbookCulled = renderWith(city, "zbuffer", {{"occlusion-cull", "on"}}, 640, 360);
+  EXPECT_EQ(*culled.stats.wrong_pixels, 0u);
+  EXPECT_EQ(*textbookCulled.stats.wrong_pixels, 0u);
+  EXPECT_EQ(culled.stats.covered_pixels, plain.stats.covered_pixels);
+  EXPECT_EQ(textbookCulled.stats.covered_pixels, textbook.stats.covered_pixels);
+  EXPECT_LT(textbookCulled.stats.depth_tests, textbook.stats.depth_tests);
+  EXPECT_EQ(culled.stats.culled_occlusion, detail(culled.stats, "triangles_culled"));
+  EXPECT_GT(detail(culled.stats, "objects_culled"), detail(culled.stats, "objects") / 2);
+  // Hidden: the triangles set up without culling that show at no pixel. Culled among them: those
+  // no longer set up.
+  std::set<int32_t> shown(plain.triangleId.begin(), plain.triangleId.end());
+  shown.erase(-1);
+  const uint64_t setUp = detail(plain.stats, "triangles_drawn"), setUpCulled = detail(culled.stats, "triangles_drawn");
+  const double fraction = double(setUp - setUpCulled) / double(setUp - shown.size());
+  std::printf("city at 640x360: %llu of %llu hidden triangles culled before set-up (%.1f%%)\n",
+              (unsigned long long)(setUp - setUpCulled), (unsigned long long)(setUp - shown.size()), 100 * fraction);
+  EXPECT_GT(fraction, 0.75);
+  // Odd sizes.
+  for (auto [w, h] : {std::pair{1, 1}, {3, 1000}, {37, 23}}) {
+    EXPECT_EQ(*renderWith(city, "hzb", {{"occlusion-cull", "on"}}, w, h).stats.wrong_pixels, 0u) << w << "x" << h;
+    EXPECT_EQ(*renderWith(city, "zbuffer", {{"occlusion-cull", "on"}}, w, h).stats.wrong_pixels, 0u) << w << "x" << h;
+  }
+  EXPECT_THROW(renderWith(city, "zbuffer", {{"occlusion-cull", "on"}, {"raster", "scanline"}}, 64, 48), InputError);
 }
 
 }  // namespace

@@ -33,6 +33,10 @@ Guarantee listPriorityFailures(const std::string& key);
 /// The scenes of the conformance suite where that order is wrong (failures.cpp).
 std::vector<std::string> listPriorityFailureScenes(const std::string& key);
 
+/// The textbook z-buffer with occlusion culling (hzb.cpp: objects tested against the z-pyramid,
+/// their triangles drawn with a depth test at every pixel).
+void zbufferOcclusionCulled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
+
 /// The production z-buffer: binned, tiled, SIMD, multithreaded (zbuffer_tiled.cpp).
 void zbufferTiled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
 

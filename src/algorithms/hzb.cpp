@@ -119,14 +119,31 @@ class HierarchicalZBuffer {
   using Pixels = ZBufferPixels<S, M>;
   using T = typename Pixels::T;
 
-  HierarchicalZBuffer(std::span<const SetupTriangle> tris, const Camera& camera, const RenderOptions& options,
-                      Frame& frame)
+  // `tris` may grow between calls of drawFrom (objects set up batch by batch). With
+  // `testTriangles` false the pyramid only serves the object test: every triangle is drawn over
+  // all its tiles, the textbook z-buffer's loop.
+  HierarchicalZBuffer(const std::vector<SetupTriangle>& tris, const Camera& camera, const RenderOptions& options,
+                      Frame& frame, bool testTriangles)
       : tris_(tris), camera_(camera), pixels_(camera, options, frame),
-        pyramid_(camera.width, camera.height, pixels_.clearValue()), depth_(pixels_.depthSetup()) {}
+        pyramid_(camera.width, camera.height, pixels_.clearValue()), depth_(pixels_.depthSetup()),
+        testTriangles_(testTriangles) {}
 
-  void drawAll(DrawCounters& n) {
-    for (uint32_t i = 0; i < tris_.size(); ++i) draw(i, n);
+  /// Triangles [first, end) of the list, in its order.
+  void drawFrom(size_t first, DrawCounters& n) {
+    for (size_t i = first; i < tris_.size(); ++i) draw(uint32_t(i), n);
   }
+
+  /// The object test of occlusion culling: whether every pixel of the box [x0, x1] x [y0, y1]
+  /// (in the image) already holds a value at least as near as `nearest` (a stored value none of
+  /// the object's fragments is nearer than), so that none of them could win the depth test. From
+  /// the smallest entry containing the box down, as for a triangle; exact at the tiles' pixels.
+  bool boxHidden(int x0, int y0, int x1, int y1, double nearest) const {
+    const Rect box{x0, y0, x1, y1};
+    int k = 0;
+    while (k + 1 < pyramid_.levels() && !inOneEntry(box, k)) ++k;
+    return hiddenIn(k, x0 >> ZPyramid<S, M>::shift(k), y0 >> ZPyramid<S, M>::shift(k), box, nearest);
+  }
+  DepthSetup depthSetup() const { return depth_; }
   void resolve(const TriangleShader& shade, DrawCounters& n) { pixels_.resolve(tris_, shade, n); }
   const std::array<LevelCounts, kMaxLevels>& counts() const { return counts_; }
   int levels() const { return pyramid_.levels(); }
@@ -134,10 +151,39 @@ class HierarchicalZBuffer {
   uint64_t bytes() const { return pixels_.bytes() + pyramid_.bytes(); }
 
  private:
-  // Triangle i, from the smallest entry that contains its screen box.
+  bool hiddenIn(int k, int x, int y, const Rect& box, double nearest) const {
+    if (!storedNearer<M>(nearest, double(pyramid_.at(k, x, y)))) return true;
+    const int s = ZPyramid<S, M>::shift(k);
+    const Rect part{std::max(x << s, box.x0), std::max(y << s, box.y0), std::min(((x + 1) << s) - 1, box.x1),
+                    std::min(((y + 1) << s) - 1, box.y1)};
+    if (k == 0) {
+      for (int py = part.y0; py <= part.y1; ++py)
+        for (int px = part.x0; px <= part.x1; ++px)
+          if (storedNearer<M>(nearest, double(pixels_.at(size_t(py) * size_t(camera_.width) + size_t(px))))) return false;
+      return true;
+    }
+    const int cs = ZPyramid<S, M>::shift(k - 1);
+    for (int cy = part.y0 >> cs; cy <= part.y1 >> cs; ++cy)
+      for (int cx = part.x0 >> cs; cx <= part.x1 >> cs; ++cx)
+        if (!hiddenIn(k - 1, cx, cy, box, nearest)) return false;
+    return true;
+  }
+
+  // Triangle i, from the smallest entry that contains its screen box (without triangle tests:
+  // over every tile its box meets).
   void draw(uint32_t i, DrawCounters& n) {
     const SetupTriangle& t = tris_[i];
     current_ = {i, pixels_.planes(t), nearestStored<S, M>(t, depth_), 0, 0, {t.minX, t.minY, t.maxX, t.maxY}};
+    if (!testTriangles_) {
+      const Rect& b = current_.box;
+      for (int ty = b.y0 >> kTileShift; ty <= b.y1 >> kTileShift; ++ty)
+        for (int tx = b.x0 >> kTileShift; tx <= b.x1 >> kTileShift; ++tx)
+          drawTile(tx, ty,
+                   {std::max(tx << kTileShift, b.x0), std::max(ty << kTileShift, b.y0),
+                    std::min(((tx + 1) << kTileShift) - 1, b.x1), std::min(((ty + 1) << kTileShift) - 1, b.y1)},
+                   n);
+      return;
+    }
     current_.pErr = planeError(current_.m.p, camera_.width, camera_.height);
     current_.qErr = planeError(current_.m.q, camera_.width, camera_.height);
     int k = 0;
@@ -217,11 +263,12 @@ class HierarchicalZBuffer {
     Rect box;
   };
 
-  std::span<const SetupTriangle> tris_;
+  const std::vector<SetupTriangle>& tris_;
   const Camera& camera_;
   Pixels pixels_;
   ZPyramid<S, M> pyramid_;
   const DepthSetup depth_;
+  const bool testTriangles_;
   Current current_{};
   std::array<LevelCounts, kMaxLevels> counts_{};
   uint64_t hidden_ = 0;  // triangles rejected in every tile they meet
@@ -241,28 +288,120 @@ const std::string& levelKey(int k, int what) {
   return keys[size_t(k)][size_t(what)];
 }
 
-void hzb(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
-         Frame& frame) {
+// Occlusion culling (occlusion-cull=on): the scene's meshes are the objects, drawn in kBatches
+// batches by the least depth of their boxes, nearest first. Before a batch is set up, each of its
+// meshes' bound (the occlusion buffer's: meshBound, frontend/mesh_bounds.cpp: a pixel box and a
+// stored value none of its fragments is nearer than) is tested against the pyramid; a mesh hidden
+// there is dropped whole, none of its triangles set up. Hidden now, hidden at the end: stored
+// values only come nearer. Meshes without a bound are drawn in the first batch.
+constexpr size_t kBatches = 32;
+
+// What occlusion culling counted.
+struct ObjectCounts {
+  uint64_t objects = 0, objectsCulled = 0, trianglesCulled = 0, batches = 0;
+};
+
+// The scene's triangles drawn object by object into `hz` (see kBatches), each batch's set-up
+// triangles appended to `triangles` (nearest faces first when `frontToBack`); front-end counts
+// summed into `counters`, the front end's memory into `frontEndBytes`.
+template <class HZ>
+ObjectCounts drawByObjects(const Scene& scene, const Camera& camera, const RenderOptions& options, bool frontToBack,
+                           HZ& hz, std::vector<SetupTriangle>& triangles, FrontEndCounters& counters,
+                           uint64_t& frontEndBytes, DrawCounters& n) {
+  const size_t meshCount = scene.meshes.size();
+  std::vector<MeshTest> tests(meshCount);
+  std::vector<MeshBound> bounds(meshCount);
+  const MeshView view = meshView(camera, hz.depthSetup());
+  FrontEndOutput vertices, fe;
+  runVertexPass(scene, camera, options, vertices, [&](size_t first, size_t last) {
+    meshBounds(scene, first, last, view, tests.data() + first, bounds.data() + first);
+    for (size_t m = first; m < last; ++m)
+      if (vertices.meshCulled[m]) tests[m] = MeshTest::Outside;
+  });
+  std::vector<uint32_t> unbounded, bounded;
+  for (uint32_t m = 0; m < meshCount; ++m) {
+    if (tests[m] == MeshTest::Outside) counters.culledFrustum += scene.meshes[m].triangleCount;
+    else (tests[m] == MeshTest::None ? unbounded : bounded).push_back(m);
+  }
+  std::stable_sort(bounded.begin(), bounded.end(), [&](uint32_t a, uint32_t b) { return bounds[a].zMin < bounds[b].zMin; });
+  const std::vector<uint32_t> ranks =
+      frontToBack ? faceRanks(faceKeys(scene, camera, SortKey::Min), /*backToFront=*/false) : std::vector<uint32_t>{};
+  ObjectCounts c;
+  c.objects = unbounded.size() + bounded.size();
+  const size_t perBatch = std::max<size_t>(1, (bounded.size() + kBatches - 1) / kBatches);
+  std::vector<uint32_t> batch;
+  std::vector<TriangleRange> ranges;
+  for (size_t start = 0; start < bounded.size() || c.batches == 0; start += perBatch) {
+    batch.clear();
+    if (c.batches == 0) batch = unbounded;
+    for (size_t i = start; i < std::min(bounded.size(), start + perBatch); ++i) {
+      const MeshBound& b = bounds[bounded[i]];
+      if (hz.boxHidden(b.minX, b.minY, b.maxX, b.maxY, b.nearest)) {
+        ++c.objectsCulled;
+        c.trianglesCulled += scene.meshes[bounded[i]].triangleCount;
+      } else {
+        batch.push_back(bounded[i]);
+      }
+    }
+    ++c.batches;
+    if (batch.empty()) continue;
+    std::sort(batch.begin(), batch.end());  // set-up takes sorted ranges
+    ranges.clear();
+    for (uint32_t m : batch) ranges.push_back({scene.meshes[m].firstTriangle, scene.meshes[m].firstTriangle + scene.meshes[m].triangleCount});
+    FrontEndOptions only;
+    only.only = &ranges;
+    runSetUp(scene, camera, options, vertices, fe, {}, only);
+    counters.add(fe);
+    frontEndBytes = std::max(frontEndBytes, fe.memoryBytes() + vertices.memoryBytes());
+    std::vector<SetupTriangle> set = fe.flatten();
+    if (frontToBack) byFaceRank(ranks)(set);
+    const size_t first = triangles.size();
+    triangles.insert(triangles.end(), set.begin(), set.end());
+    hz.drawFrom(first, n);
+  }
+  return c;
+}
+
+// A frame of the hierarchical z-buffer (`testTriangles`) or of the textbook z-buffer on its
+// pyramid (occlusion culling only), with or without occlusion culling.
+void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, bool frontToBack,
+               bool testTriangles, bool cull, Frame& frame) {
   Timer timer;
   Stats& st = frame.stats;
   const TriangleShader shade(scene, camera, options.shading);
-  FrontEndOutput fe;
-  runFrontEnd(scene, camera, options, fe);
-  std::vector<SetupTriangle> triangles = fe.flatten();
-  st.addTime("frontend", timer.lap());
-  const bool frontToBack = params.text("order") == "front-to-back";
-  if (frontToBack) {
-    byFaceRank(faceRanks(faceKeys(scene, camera, SortKey::Min), /*backToFront=*/false))(triangles);
-    st.addTime("order", timer.lap());
-  }
   frame.clear(options.background, resolveThreads(options.threads));
+  std::vector<SetupTriangle> triangles;
   DrawCounters n;
   visitDepthFormat(options.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
-    HierarchicalZBuffer<S, M> hz(triangles, camera, options, frame);
-    hz.drawAll(n);
+    HierarchicalZBuffer<S, M> hz(triangles, camera, options, frame, testTriangles);
+    st.addTime("clear", timer.lap());
+    FrontEndCounters counters;
+    uint64_t frontEndBytes = 0;
+    if (cull) {
+      const ObjectCounts c = drawByObjects(scene, camera, options, frontToBack, hz, triangles, counters, frontEndBytes, n);
+      st.addTime("frontend+raster", timer.lap());
+      st.culled_occlusion = c.trianglesCulled;
+      st.setDetail("objects", c.objects);
+      st.setDetail("objects_culled", c.objectsCulled);
+      st.setDetail("triangles_culled", c.trianglesCulled);
+      st.setDetail("batches", c.batches);
+    } else {
+      FrontEndOutput fe;
+      runFrontEnd(scene, camera, options, fe);
+      triangles = fe.flatten();
+      counters = fe;
+      frontEndBytes = fe.memoryBytes();
+      st.addTime("frontend", timer.lap());
+      if (frontToBack) {
+        byFaceRank(faceRanks(faceKeys(scene, camera, SortKey::Min), /*backToFront=*/false))(triangles);
+        st.addTime("order", timer.lap());
+      }
+      hz.drawFrom(0, n);
+    }
     hz.resolve(shade, n);
     st.addTime("raster", timer.lap());
-    recordZBufferStats(st, fe, triangles, n, hz.bytes(), options, frame);
+    recordZBufferStats(st, counters, frontEndBytes, triangles, n, hz.bytes(), options, frame);
+    if (!testTriangles) return;
     st.setDetail("levels", uint64_t(hz.levels()));
     st.setDetail("triangles_drawn", uint64_t(triangles.size()));
     st.setDetail("triangles_rejected", hz.trianglesRejected());
@@ -273,11 +412,20 @@ void hzb(const Scene& scene, const Camera& camera, const RenderOptions& options,
       st.setDetail(levelKey(k, 2), c.descended);
     }
   });
-  st.setDetail("order", params.text("order"));
-  st.setDetail("pyramid_updates", "exact");
+}
+
+void hzb(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
+         Frame& frame) {
+  drawFrame(scene, camera, options, params.text("order") == "front-to-back", true, params.flag("occlusion-cull"), frame);
+  frame.stats.setDetail("order", params.text("order"));
+  frame.stats.setDetail("pyramid_updates", "exact");
 }
 
 }  // namespace
+
+void zbufferOcclusionCulled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame) {
+  drawFrame(scene, camera, options, /*frontToBack=*/false, /*testTriangles=*/false, /*cull=*/true, frame);
+}
 
 AlgorithmInfo hzbAlgorithm() {
   AlgorithmInfo a;
@@ -286,7 +434,10 @@ AlgorithmInfo hzbAlgorithm() {
   a.source = "Ukrainian paper (the hierarchical z-buffer of Greene, Kass and Miller, 1993)";
   a.params = {{"order", ParamType::Choice, "front-to-back", {"front-to-back", "submission"}, -1e300, 1e300,
                "the order triangles are drawn in: faces by their nearest vertex, nearest first (what the pyramid "
-               "rejects most with), or as submitted"}};
+               "rejects most with), or as submitted"},
+              {"occlusion-cull", ParamType::Bool, "off", {}, -1e300, 1e300,
+               "occlusion culling: meshes in batches nearest first, each mesh's screen box and nearest depth tested "
+               "against the pyramid before any of its triangles is set up"}};
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.guarantee.condition = "a z-buffer in any order; ties of equal depth are ambiguous";
   a.run = hzb;

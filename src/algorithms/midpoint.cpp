@@ -258,7 +258,7 @@ void midpoint(const Scene& scene, const Camera& camera, const RenderOptions& opt
     st.addTime("raster", timer.lap());
     const MidpointCounts& c = mz.counts();
     n.depthTests = c.pointComparisons + c.pixelTests;  // the paper's z comparisons
-    recordZBufferStats(st, fe, triangles, n, mz.bytes(), options, frame);
+    recordZBufferStats(st, fe, fe.memoryBytes(), triangles, n, mz.bytes(), options, frame);
     st.setDetail("point_comparisons", c.pointComparisons);
     st.setDetail("pixel_tests", c.pixelTests);
     st.setDetail("parts_tested", c.parts);

@@ -11,7 +11,9 @@
 // submission order: so `raster=halfspace` and `raster=scanline` are this file's few lines. Its
 // counters are the textbook's: one z comparison per fragment, one write per fragment that won.
 // `raster=tiled` (the default) is the production z-buffer of zbuffer_tiled.cpp: the same image,
-// bit for bit, computed with far fewer tests on every core.
+// bit for bit, computed with far fewer tests on every core. `occlusion-cull=on` drops whole meshes
+// hidden behind what is drawn before setting them up, testing them against a z-pyramid kept over
+// the textbook z-buffer (hzb.cpp: zbufferOcclusionCulled).
 #include "algorithms/algorithms.hpp"
 #include "algorithms/draw.hpp"
 
@@ -21,6 +23,12 @@ namespace {
 void zbuffer(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
              Frame& frame) {
   const std::string& raster = params.text("raster");
+  if (params.flag("occlusion-cull")) {
+    if (raster == "scanline")
+      throw InputError("--param occlusion-cull=on: zbuffer culls objects on the half-space rasterizer only (drop "
+                       "--param raster=scanline)");
+    return zbufferOcclusionCulled(scene, camera, options, frame);
+  }
   if (raster == "tiled") {
     if (options.countWrites)
       throw InputError("--overdraw-image: zbuffer's tiled rasterizer does not count writes per pixel (it replaces "
@@ -42,7 +50,11 @@ AlgorithmInfo zbufferAlgorithm() {
                "tiled: the production z-buffer (binned, SIMD, every core; counts only the tests it makes); "
                "halfspace: the textbook z-buffer on the scalar reference rasterizer, every fragment tested in "
                "submission order; scanline: the same on the lecture notes' scanline rasterizer, depth stepped "
-               "along each span"}};
+               "along each span"},
+              {"occlusion-cull", ParamType::Bool, "off", {}, -1e300, 1e300,
+               "occlusion culling: meshes in batches nearest first, each mesh's screen box and nearest depth tested "
+               "against a z-pyramid over the depth buffer before any of its triangles is set up; the triangles left "
+               "drawn by the textbook loop (a depth test per fragment, half-space rasterizer, whatever raster says)"}};
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.guarantee.condition = "up to the depth format's precision: z-fighting is counted as ambiguous";
   a.run = zbuffer;

@@ -104,9 +104,9 @@ class ZBufferPixels {
 /// The statistics every z-buffer of this kind reports, as drawScene fills them: front-end counts,
 /// the counters, the memory of its buffers (plus the set-up triangles, the front end's and the
 /// frame's), the depth format.
-inline void recordZBufferStats(Stats& st, const FrontEndOutput& fe, const std::vector<SetupTriangle>& triangles,
-                               const DrawCounters& n, uint64_t bufferBytes, const RenderOptions& options,
-                               const Frame& frame) {
+inline void recordZBufferStats(Stats& st, const FrontEndCounters& fe, uint64_t frontEndBytes,
+                               const std::vector<SetupTriangle>& triangles, const DrawCounters& n, uint64_t bufferBytes,
+                               const RenderOptions& options, const Frame& frame) {
   st.depth_format = options.depthFormat.name();
   st.triangles_clipped = fe.clipped;
   st.triangles_degenerate = fe.degenerate;
@@ -116,7 +116,7 @@ inline void recordZBufferStats(Stats& st, const FrontEndOutput& fe, const std::v
   st.depth_writes = n.depthWrites;
   st.color_writes = n.colorWrites;
   st.covered_pixels = n.covered;
-  st.memory_bytes = bufferBytes + triangles.capacity() * sizeof(SetupTriangle) + fe.memoryBytes() + frameBytes(frame);
+  st.memory_bytes = bufferBytes + triangles.capacity() * sizeof(SetupTriangle) + frontEndBytes + frameBytes(frame);
 }
 
 }  // namespace hsr::algo
