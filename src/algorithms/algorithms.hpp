@@ -18,6 +18,8 @@ AlgorithmInfo bspAlgorithm();      // bsp.cpp: a BSP tree painted back to front
 AlgorithmInfo painterAlgorithm();         // painter.cpp
 AlgorithmInfo reversePainterAlgorithm();  // reverse_painter.cpp
 AlgorithmInfo sortedZbufferAlgorithm();   // sorted_zbuffer.cpp
+AlgorithmInfo hzbAlgorithm();             // hzb.cpp: Greene's hierarchical z-buffer
+AlgorithmInfo midpointAlgorithm();        // midpoint.cpp: the Ukrainian paper's midpoint subdivision
 
 /// The scene's BSP tree (built once per scene and options, bsp.cpp) drawn in its order from the
 /// camera, back to front or front to back, under `rule`; fills the statistics and the tree's
@@ -30,6 +32,10 @@ void drawInBspOrder(const Scene& scene, const Camera& camera, const RenderOption
 Guarantee listPriorityFailures(const std::string& key);
 /// The scenes of the conformance suite where that order is wrong (failures.cpp).
 std::vector<std::string> listPriorityFailureScenes(const std::string& key);
+
+/// The textbook z-buffer with occlusion culling (hzb.cpp: objects tested against the z-pyramid,
+/// their triangles drawn with a depth test at every pixel).
+void zbufferOcclusionCulled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
 
 /// The production z-buffer: binned, tiled, SIMD, multithreaded (zbuffer_tiled.cpp).
 void zbufferTiled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);

@@ -24,6 +24,8 @@ std::vector<AlgorithmInfo>& registry() {
       algo::reversePainterAlgorithm(),
       algo::sortedZbufferAlgorithm(),
       algo::bspAlgorithm(),
+      algo::hzbAlgorithm(),
+      algo::midpointAlgorithm(),
     };
     for (const AlgorithmInfo& a : builtIn) checkDeclaration(a);
     return builtIn;

@@ -13,6 +13,8 @@
 // `raster=tiled` (the default) is the production z-buffer of zbuffer_tiled.cpp: the same image,
 // bit for bit, computed with far fewer tests on every core. `depth-slices=N` is the KTH thesis's
 // mitigation of z-fighting: the depth range drawn in parts, each with the buffer's full precision.
+// `occlusion-cull=on` drops whole meshes hidden behind what is drawn before setting them up,
+// testing them against a z-pyramid kept over the textbook z-buffer (hzb.cpp: zbufferOcclusionCulled).
 #include "algorithms/algorithms.hpp"
 #include "algorithms/draw.hpp"
 
@@ -86,6 +88,15 @@ void zbufferInSlices(const Scene& scene, const Camera& camera, const RenderOptio
 void zbuffer(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
              Frame& frame) {
   const std::string& raster = params.text("raster");
+  if (params.flag("occlusion-cull")) {
+    if (params.integer("depth-slices") > 1)
+      throw InputError("--param occlusion-cull=on: culls against one depth buffer over the whole range; drop "
+                       "--param depth-slices");
+    if (raster == "scanline")
+      throw InputError("--param occlusion-cull=on: zbuffer culls objects on the half-space rasterizer only (drop "
+                       "--param raster=scanline)");
+    return zbufferOcclusionCulled(scene, camera, options, frame);
+  }
   if (raster == "tiled") {
     if (params.integer("depth-slices") > 1)
       throw InputError("--param depth-slices: the tiled z-buffer draws the whole range at once; add --param "
@@ -118,7 +129,11 @@ AlgorithmInfo zbufferAlgorithm() {
                "tiles on every core, scalar), the one the painter's family draws with by default, so times compare"},
               {"depth-slices", ParamType::Int, "1", {}, 1, 64,
                "draw the depth range in this many parts of equal far/near ratio, farthest first, each with the "
-               "depth format's whole precision (the KTH thesis's mitigation of z-fighting; not with raster=tiled)"}};
+               "depth format's whole precision (the KTH thesis's mitigation of z-fighting; not with raster=tiled)"},
+              {"occlusion-cull", ParamType::Bool, "off", {}, -1e300, 1e300,
+               "occlusion culling: meshes in batches nearest first, each mesh's screen box and nearest depth tested "
+               "against a z-pyramid over the depth buffer before any of its triangles is set up; the triangles left "
+               "drawn by the textbook loop (a depth test per fragment, half-space rasterizer, whatever raster says)"}};
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.guarantee.condition = "up to the depth format's precision: z-fighting is counted as ambiguous";
   a.run = zbuffer;
