@@ -18,6 +18,7 @@ AlgorithmInfo bspAlgorithm();      // bsp.cpp: a BSP tree painted back to front
 AlgorithmInfo painterAlgorithm();         // painter.cpp
 AlgorithmInfo reversePainterAlgorithm();  // reverse_painter.cpp
 AlgorithmInfo sortedZbufferAlgorithm();   // sorted_zbuffer.cpp
+AlgorithmInfo newellAlgorithm();          // newell.cpp: Newell-Newell-Sancha depth sort
 
 /// The scene's BSP tree (built once per scene and options, bsp.cpp) drawn in its order from the
 /// camera, back to front or front to back, under `rule`; fills the statistics and the tree's

@@ -24,6 +24,7 @@ std::vector<AlgorithmInfo>& registry() {
       algo::reversePainterAlgorithm(),
       algo::sortedZbufferAlgorithm(),
       algo::bspAlgorithm(),
+      algo::newellAlgorithm(),
     };
     for (const AlgorithmInfo& a : builtIn) checkDeclaration(a);
     return builtIn;
