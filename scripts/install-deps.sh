@@ -5,7 +5,8 @@
 set -euo pipefail
 packages=(build-essential cmake ninja-build pkg-config
   libglm-dev nlohmann-json3-dev libfmt-dev libcli11-dev libassimp-dev libopenexr-dev
-  libpng-dev libstb-dev libgtest-dev libbenchmark-dev libhwy-dev "$@")
+  libpng-dev libstb-dev libgtest-dev libbenchmark-dev libhwy-dev
+  librsvg2-bin "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

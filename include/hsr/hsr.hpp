@@ -10,3 +10,4 @@
 #include <hsr/render.hpp>
 #include <hsr/scene.hpp>
 #include <hsr/occlusion.hpp>
+#include <hsr/svg.hpp>

@@ -9,6 +9,7 @@
 #include <hsr/render.hpp>
 
 #include "algorithms/draw.hpp"
+#include "algorithms/polygon_split.hpp"
 
 namespace hsr::algo {
 
@@ -25,6 +26,18 @@ AlgorithmInfo newellAlgorithm();          // newell.cpp: Newell-Newell-Sancha de
 /// details (nodes, fragments, splits, depth, built, build_ms).
 void drawInBspOrder(const Scene& scene, const Camera& camera, const RenderOptions& options,
                     const BspBuildOptions& build, WriteRule rule, DrawRaster raster, bool frontToBack, Frame& frame);
+
+/// A painting order as polygons, back to front: what painter, newell and bsp draw from a camera,
+/// and what the vector output (io/svg.cpp) writes.
+struct PaintedPolygons {
+  std::vector<dvec3> vertices;       // world space
+  std::vector<PolygonRef> polygons;  // back to front, each a part of (or all of) a scene face
+  std::vector<uint32_t> triangles;   // per polygon: a scene triangle of its face (its shading)
+};
+/// The painting order of the algorithm with these parameters (painter.cpp, newell.cpp, bsp.cpp).
+void painterPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out);
+void newellPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out);
+void bspPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out);
 
 /// What a list-priority algorithm ordering faces by one sort key fails on (painter.cpp): the
 /// painter's with that key, and the reverse painter's with that order (the same image).

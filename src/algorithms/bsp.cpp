@@ -416,6 +416,25 @@ void drawInBspOrder(const Scene& scene, const Camera& camera, const RenderOption
                      rank.size() * 2 * sizeof(uint32_t);
 }
 
+void bspPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out) {
+  BspBuildOptions build;
+  build.heuristic = params.text("heuristic") == "first" ? BspHeuristic::First : BspHeuristic::Scored;
+  build.maxFragments = uint64_t(params.integer("max-fragments"));
+  bool built = false;
+  const std::shared_ptr<const BuiltBsp> bsp = cachedBsp(scene, build, built);
+  const BspTree& tree = bsp->tree;
+  std::vector<uint32_t> order;
+  tree.backToFront(homogeneousEye(camera), order);
+  out.vertices.assign(tree.vertices().begin(), tree.vertices().end());
+  out.polygons.clear();
+  out.triangles.clear();
+  for (uint32_t i : order) {
+    const BspTree::Fragment& f = tree.fragments()[i];
+    out.polygons.push_back({f.firstVertex, f.vertexCount, f.face});
+    out.triangles.push_back(f.triangle);
+  }
+}
+
 AlgorithmInfo bspAlgorithm() {
   AlgorithmInfo a;
   a.name = "bsp";

@@ -42,8 +42,10 @@ class DepthSorter {
   DepthSorter(const Scene& scene, const Camera& camera, uint64_t maxPolygons);
   void addInputs();
   void sort();
-  /// The polygons in painting order (back to front), their T-junctions closed.
-  void result(std::vector<dvec3>& pool, std::vector<PolygonRef>& polygons, std::vector<uint32_t>& triangles);
+  /// The polygons in painting order (back to front), their T-junctions closed (`gained`: those
+  /// that gained vertices on their edges).
+  void result(std::vector<dvec3>& pool, std::vector<PolygonRef>& polygons, std::vector<uint32_t>& triangles,
+              std::vector<bool>& gained);
   double epsilon() const { return epsilon_; }
   NewellCounts counts;
 
@@ -56,11 +58,15 @@ class DepthSorter {
     bool marked = false;            // moved to the front since the last polygon was painted
   };
   enum class Verdict : uint8_t { Clear, QFirst, Entangled };
-  // Where a Q is: position in the list part `stack_` (moved to the front) or `rest_` (sorted).
-  struct Place {
-    std::vector<uint32_t>* list;
-    size_t index;
+  // A polygon of the sorted rest as its scan reads it: farthest depth and screen box (rounded
+  // outwards to float: a box test that separates them in float separates them exactly), packed
+  // so that the scan over the list runs through memory in order.
+  struct RestEntry {
+    double zmax;
+    float lox, hix, loy, hiy;
+    uint32_t id, face;
   };
+  RestEntry entryOf(uint32_t id) const;
 
   std::span<const dvec3> world(const Poly& p) const { return {pool_.data() + p.first, p.count}; }
   std::span<const dvec2> screen(const Poly& p) const { return {pixel_.data() + p.first, p.count}; }
@@ -70,13 +76,13 @@ class DepthSorter {
   bool projectionsOverlap(const Poly& p, const Poly& q) const;
   Verdict decide(const Poly& p, const Poly& q);
   void step();
-  void act(uint32_t p, Place q, Verdict verdict);
+  void act(uint32_t p, uint32_t q, Verdict verdict);
+  void takeOut();
   void insertSorted(uint32_t id);
   void split(uint32_t id, const SplitPlane& plane);
   SplitPlane planeThroughEye(const Poly& p) const;
-  bool sortedBefore(uint32_t a, uint32_t b) const {
-    const Poly &x = polys_[a], &y = polys_[b];
-    return x.zmax != y.zmax ? x.zmax < y.zmax : x.face < y.face;
+  static bool sortedBefore(const RestEntry& a, const RestEntry& b) {
+    return a.zmax != b.zmax ? a.zmax < b.zmax : a.face < b.face;
   }
 
   const Scene& scene_;
@@ -90,8 +96,10 @@ class DepthSorter {
   std::vector<SplitPlane> planes_;
   std::vector<int8_t> eyeSide_;   // per plane: the side the eye is on (+1, -1; 0: the eye is in it)
   std::vector<Poly> polys_;
-  std::vector<uint32_t> rest_;    // not yet painted nor moved: by farthest depth, farthest last
+  std::vector<RestEntry> rest_;   // not yet painted nor moved: by farthest depth, farthest last
   std::vector<uint32_t> stack_;   // the front of the list: the polygon being tested last
+  size_t at_ = 0;                 // where in stack_ (below the top) or rest_ the Q that stopped the scan is
+  bool atStack_ = false;
   std::vector<uint32_t> out_;     // painted, back to front
   std::vector<dvec3> front_, back_;
 };
@@ -233,29 +241,60 @@ DepthSorter::Verdict DepthSorter::decide(const Poly& p, const Poly& q) {
 // polygons moved before it, then the sorted rest down to the first entirely nearer than it.
 void DepthSorter::step() {
   const uint32_t p = stack_.back();
+  const Poly& pp = polys_[p];
   for (size_t i = stack_.size() - 1; i-- > 0;) {
-    const Verdict v = decide(polys_[p], polys_[stack_[i]]);
-    if (v != Verdict::Clear) return act(p, {&stack_, i}, v);
+    const Verdict v = decide(pp, polys_[stack_[i]]);
+    if (v == Verdict::Clear) continue;
+    at_ = i;
+    atStack_ = true;
+    return act(p, stack_[i], v);
   }
+  // The rest: the first three tests on the packed entries, the others on the polygons.
+  const float lox = std::nextafter(float(pp.lo.x), -INFINITY), hix = std::nextafter(float(pp.hi.x), INFINITY);
+  const float loy = std::nextafter(float(pp.lo.y), -INFINITY), hiy = std::nextafter(float(pp.hi.y), INFINITY);
+  const RestEntry* rest = rest_.data();
+  uint64_t byX = 0, byY = 0, pairs = 0;
   for (size_t i = rest_.size(); i-- > 0;) {
-    if (polys_[rest_[i]].zmax <= polys_[p].zmin) {  // this one and all before it are nearer than P
-      ++counts.pairs;
+    const RestEntry& e = rest[i];
+    ++pairs;
+    if (e.zmax <= pp.zmin) {  // this one and all before it are nearer than P
       ++counts.byDepth;
       break;
     }
-    const Verdict v = decide(polys_[p], polys_[rest_[i]]);
-    if (v != Verdict::Clear) return act(p, {&rest_, i}, v);
+    if (hix <= e.lox || e.hix <= lox) {
+      ++byX;
+      continue;
+    }
+    if (hiy <= e.loy || e.hiy <= loy) {
+      ++byY;
+      continue;
+    }
+    --pairs;  // decide() counts it
+    const Verdict v = decide(pp, polys_[e.id]);
+    if (v == Verdict::Clear) continue;
+    counts.pairs += pairs, counts.byX += byX, counts.byY += byY;
+    at_ = i;
+    atStack_ = false;
+    return act(p, e.id, v);
   }
+  counts.pairs += pairs, counts.byX += byX, counts.byY += byY;
   out_.push_back(p);
   stack_.pop_back();
   for (uint32_t s : stack_) polys_[s].marked = false;
 }
 
-void DepthSorter::act(uint32_t p, Place at, Verdict verdict) {
-  const uint32_t q = (*at.list)[at.index];
+// Takes the Q that stopped the scan out of the list.
+void DepthSorter::takeOut() {
+  if (atStack_)
+    stack_.erase(stack_.begin() + ptrdiff_t(at_));
+  else
+    rest_.erase(rest_.begin() + ptrdiff_t(at_));
+}
+
+void DepthSorter::act(uint32_t p, uint32_t q, Verdict verdict) {
   if (verdict == Verdict::QFirst && !polys_[q].marked) {
     ++counts.reorders;
-    at.list->erase(at.list->begin() + ptrdiff_t(at.index));
+    takeOut();
     stack_.push_back(q);
     polys_[q].marked = true;
     return;
@@ -266,7 +305,7 @@ void DepthSorter::act(uint32_t p, Place at, Verdict verdict) {
   const uint32_t pPlane = polys_[p].plane, qPlane = polys_[q].plane;
   if (verdict == Verdict::QFirst) ++counts.cycles;
   if (verdict == Verdict::QFirst && spans(q, pPlane)) {
-    at.list->erase(at.list->begin() + ptrdiff_t(at.index));
+    takeOut();
     return split(q, planes_[pPlane]);
   }
   stack_.pop_back();  // P, split by Q's plane or, when it does not cross it, by a plane through the eye
@@ -275,10 +314,20 @@ void DepthSorter::act(uint32_t p, Place at, Verdict verdict) {
   return split(p, planeThroughEye(polys_[p]));
 }
 
+DepthSorter::RestEntry DepthSorter::entryOf(uint32_t id) const {
+  const Poly& p = polys_[id];
+  return {p.zmax,
+          std::nextafter(float(p.lo.x), -INFINITY),
+          std::nextafter(float(p.hi.x), INFINITY),
+          std::nextafter(float(p.lo.y), -INFINITY),
+          std::nextafter(float(p.hi.y), INFINITY),
+          id,
+          p.face};
+}
+
 void DepthSorter::insertSorted(uint32_t id) {
-  const auto at = std::upper_bound(rest_.begin(), rest_.end(), id,
-                                   [&](uint32_t a, uint32_t b) { return sortedBefore(a, b); });
-  rest_.insert(at, id);
+  const RestEntry e = entryOf(id);
+  rest_.insert(std::upper_bound(rest_.begin(), rest_.end(), e, sortedBefore), e);
 }
 
 // Replaces polygon `id` (taken out of the list) by its two pieces, back in the sorted rest.
@@ -312,11 +361,11 @@ SplitPlane DepthSorter::planeThroughEye(const Poly& p) const {
 
 void DepthSorter::sort() {
   rest_.resize(polys_.size());
-  for (uint32_t i = 0; i < rest_.size(); ++i) rest_[i] = i;
-  std::sort(rest_.begin(), rest_.end(), [&](uint32_t a, uint32_t b) { return sortedBefore(a, b); });
+  for (uint32_t i = 0; i < rest_.size(); ++i) rest_[i] = entryOf(i);
+  std::sort(rest_.begin(), rest_.end(), sortedBefore);
   while (!stack_.empty() || !rest_.empty()) {
     if (stack_.empty()) {
-      stack_.push_back(rest_.back());
+      stack_.push_back(rest_.back().id);
       rest_.pop_back();
     }
     step();
@@ -324,7 +373,7 @@ void DepthSorter::sort() {
 }
 
 void DepthSorter::result(std::vector<dvec3>& pool, std::vector<PolygonRef>& polygons,
-                         std::vector<uint32_t>& triangles) {
+                         std::vector<uint32_t>& triangles, std::vector<bool>& gained) {
   polygons.clear();
   triangles.clear();
   for (uint32_t id : out_) {
@@ -333,18 +382,20 @@ void DepthSorter::result(std::vector<dvec3>& pool, std::vector<PolygonRef>& poly
   }
   pool = pool_;
   closeTJunctions(pool, polygons, epsilon_);
+  gained.resize(polygons.size());
+  for (size_t i = 0; i < polygons.size(); ++i) gained[i] = polygons[i].count != polys_[out_[i]].count;
 }
 
-// The painting order as a scene the drawing service draws: each polygon a fan of triangles
-// around its centre (so that a vertex a neighbour's cut put on its edge stays a corner of real
-// triangles), one face each, in painting order.
+// The painting order as a scene the drawing service draws, one triangle a face, in painting
+// order: a polygon that gained vertices on its edges (closeTJunctions) as a fan around its centre,
+// so that such a vertex stays a corner of real triangles; any other as a fan from its first vertex.
 struct DerivedPolygons {
   Scene scene;
   DerivedScene derived;
 };
 
 void derivePolygons(const Scene& original, const std::vector<dvec3>& pool, const std::vector<PolygonRef>& polygons,
-                    const std::vector<uint32_t>& triangles, DerivedPolygons& out) {
+                    const std::vector<uint32_t>& triangles, const std::vector<bool>& gained, DerivedPolygons& out) {
   constexpr size_t kPolygonsPerMesh = 1024;
   Scene& s = out.scene;
   s.source = original.source + " (newell polygons)";
@@ -355,9 +406,11 @@ void derivePolygons(const Scene& original, const std::vector<dvec3>& pool, const
     const uint32_t base = uint32_t(s.positions.size());
     s.positions.insert(s.positions.end(), pool.begin() + p.first, pool.begin() + p.first + p.count);
     const Rgba8 color = original.faceColors[p.face];
-    if (p.count == 3) {
-      s.addFace({base, base + 1, base + 2}, color);
-      polygonOf.push_back(uint32_t(i));
+    if (!gained[i]) {
+      for (uint32_t k = 1; k + 1 < p.count; ++k) {
+        s.addFace({base, base + k, base + k + 1}, color);
+        polygonOf.push_back(uint32_t(i));
+      }
       continue;
     }
     dvec3 centre{0.0};
@@ -403,10 +456,11 @@ void newell(const Scene& scene, const Camera& camera, const RenderOptions& optio
   std::vector<dvec3> pool;
   std::vector<PolygonRef> polygons;
   std::vector<uint32_t> triangles;
-  sorter.result(pool, polygons, triangles);
+  std::vector<bool> gained;
+  sorter.result(pool, polygons, triangles, gained);
   const double sortMs = timer.lap();
   DerivedPolygons derived;
-  derivePolygons(scene, pool, polygons, triangles, derived);
+  derivePolygons(scene, pool, polygons, triangles, gained, derived);
   const double deriveMs = timer.lap();
 
   // The derived scene's faces are in painting order; the front end keeps submission order, and
@@ -428,6 +482,14 @@ void newell(const Scene& scene, const Camera& camera, const RenderOptions& optio
 }
 
 }  // namespace
+
+void newellPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out) {
+  DepthSorter sorter(scene, camera, uint64_t(params.integer("max-fragments")));
+  sorter.addInputs();
+  sorter.sort();
+  std::vector<bool> gained;
+  sorter.result(out.vertices, out.polygons, out.triangles, gained);
+}
 
 AlgorithmInfo newellAlgorithm() {
   AlgorithmInfo a;
