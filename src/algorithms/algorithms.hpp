@@ -20,6 +20,23 @@ AlgorithmInfo painterAlgorithm();         // painter.cpp
 AlgorithmInfo reversePainterAlgorithm();  // reverse_painter.cpp
 AlgorithmInfo sortedZbufferAlgorithm();   // sorted_zbuffer.cpp
 AlgorithmInfo newellAlgorithm();          // newell.cpp: Newell-Newell-Sancha depth sort
+AlgorithmInfo abufferAlgorithm();         // abuffer.cpp: the exact colour reference for transparency
+
+/// Whether any face of the scene has an opacity below 1 (alpha < 255) (abuffer.cpp): then the
+/// list-priority algorithms blend in their order and the z-buffer family adds a transparent pass.
+bool hasTransparency(const Scene& scene);
+
+/// The colour error of `frame` against the A-buffer's `reference` (verify.cpp), over the pixels
+/// whose face id is the reference's (the others are the id check's: wrong or ambiguous): per
+/// channel the largest and the mean absolute difference, and the pixels where some channel
+/// differs by more than one 8-bit step.
+struct ColorError {
+  uint64_t pixels = 0;  // compared
+  int max[3] = {0, 0, 0};
+  double mean[3] = {0, 0, 0};
+  uint64_t beyondStep = 0;
+};
+ColorError colorError(const Frame& frame, const Frame& reference);
 
 /// The scene's BSP tree (built once per scene and options, bsp.cpp) drawn in its order from the
 /// camera, back to front or front to back, under `rule`; fills the statistics and the tree's

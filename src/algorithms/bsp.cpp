@@ -370,7 +370,8 @@ void bsp(const Scene& scene, const Camera& camera, const RenderOptions& options,
   BspBuildOptions build;
   build.heuristic = params.text("heuristic") == "first" ? BspHeuristic::First : BspHeuristic::Scored;
   build.maxFragments = uint64_t(params.integer("max-fragments"));
-  drawInBspOrder(scene, camera, options, build, WriteRule::Overwrite, drawRasterOf(params), false, frame);
+  drawInBspOrder(scene, camera, options, build, hasTransparency(scene) ? WriteRule::Blend : WriteRule::Overwrite,
+                 drawRasterOf(params), false, frame);
   frame.stats.setDetail("heuristic", params.text("heuristic"));
 }
 

@@ -469,7 +469,8 @@ void newell(const Scene& scene, const Camera& camera, const RenderOptions& optio
     auto byFace = [](const SetupTriangle& a, const SetupTriangle& b) { return a.face < b.face; };
     if (!std::is_sorted(tris.begin(), tris.end(), byFace)) std::stable_sort(tris.begin(), tris.end(), byFace);
   };
-  drawScene(scene, camera, options, WriteRule::Overwrite, drawRasterOf(params), inPaintingOrder, frame,
+  drawScene(scene, camera, options, hasTransparency(scene) ? WriteRule::Blend : WriteRule::Overwrite,
+            drawRasterOf(params), inPaintingOrder, frame,
             &derived.derived);
   Stats& st = frame.stats;
   st.addTime("depth_sort", sortMs);

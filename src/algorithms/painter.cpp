@@ -16,7 +16,8 @@ namespace {
 void painter(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
              Frame& frame) {
   const SortKey key = sortKeyOf(params.text("sort-key"));
-  drawScene(scene, camera, options, WriteRule::Overwrite, drawRasterOf(params),
+  drawScene(scene, camera, options, hasTransparency(scene) ? WriteRule::Blend : WriteRule::Overwrite,
+            drawRasterOf(params),
             byFaceRank(faceRanks(faceKeys(scene, camera, key), /*backToFront=*/true)), frame);
   frame.stats.setDetail("sort_key", params.text("sort-key"));
 }

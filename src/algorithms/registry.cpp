@@ -25,6 +25,7 @@ std::vector<AlgorithmInfo>& registry() {
       algo::sortedZbufferAlgorithm(),
       algo::bspAlgorithm(),
       algo::newellAlgorithm(),
+      algo::abufferAlgorithm(),
     };
     for (const AlgorithmInfo& a : builtIn) checkDeclaration(a);
     return builtIn;

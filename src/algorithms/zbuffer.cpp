@@ -14,6 +14,7 @@
 // bit for bit, computed with far fewer tests on every core.
 #include "algorithms/algorithms.hpp"
 #include "algorithms/draw.hpp"
+#include "algorithms/sort_keys.hpp"
 
 namespace hsr::algo {
 namespace {
@@ -21,6 +22,19 @@ namespace {
 void zbuffer(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
              Frame& frame) {
   const std::string& raster = params.text("raster");
+  if (hasTransparency(scene)) {
+    // Opaque faces first in submission order, then the transparent ones back to front by their
+    // centroids, depth-tested without depth writes (the tiled rasterizer's kernel has no such
+    // pass: its transparent frames are drawn by the service's binned rasterizer).
+    std::vector<uint32_t> submission(scene.faceCount());
+    for (uint32_t f = 0; f < submission.size(); ++f) submission[f] = f;
+    const DrawRaster r = raster == "scanline" ? DrawRaster::Scanline
+                         : raster == "tiled"  ? DrawRaster::Binned
+                                              : DrawRaster::HalfSpace;
+    drawScene(scene, camera, options, WriteRule::DepthTestBlend, r,
+              byFaceRank(transparentLast(scene, camera, submission, SortKey::Centroid)), frame);
+    return;
+  }
   if (raster == "tiled") {
     if (options.countWrites)
       throw InputError("--overdraw-image: zbuffer's tiled rasterizer does not count writes per pixel (it replaces "

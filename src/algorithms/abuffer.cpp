@@ -1,0 +1,119 @@
+// The A-buffer, the exact colour reference for transparency [KTH report, lecture notes]: every
+// fragment of every pixel kept — each face the pixel centre's ray meets, in double precision with
+// the reference's watertight test (bvh.hpp) — sorted by exact depth and blended front to back in
+// double, then rounded once to 8 bits. Face id, triangle and depth are the nearest fragment's, as
+// raycast's. Rows run in parallel; any thread count gives the same bits.
+#include <algorithm>
+#include <cmath>
+
+#include "algorithms/algorithms.hpp"
+#include "algorithms/bvh.hpp"
+#include "core/parallel.hpp"
+#include "core/shading.hpp"
+#include "core/timer.hpp"
+
+namespace hsr::algo {
+
+bool hasTransparency(const Scene& scene) {
+  for (const Rgba8& c : scene.faceColors)
+    if (c.a < 255) return true;
+  return false;
+}
+
+namespace {
+
+// The fragments of one pixel, nearest first, one per face (a ray through an edge the face's
+// triangles share meets both), blended front to back over the background.
+Rgba8 blendFragments(std::vector<RayHit>& hits, const Scene& scene, const TriangleShader& shade, Rgba8 background,
+                     uint64_t& fragments) {
+  std::sort(hits.begin(), hits.end(),
+            [](const RayHit& a, const RayHit& b) { return a.t != b.t ? a.t < b.t : a.triangle < b.triangle; });
+  double r = 0, g = 0, b = 0, a = 0, through = 1;  // premultiplied colour so far, and what shows through
+  for (size_t i = 0; i < hits.size() && through > 0; ++i) {
+    const uint32_t face = scene.triangles[size_t(hits[i].triangle)].face;
+    bool seen = false;
+    for (size_t k = 0; k < i && !seen; ++k) seen = scene.triangles[size_t(hits[k].triangle)].face == face;
+    if (seen) continue;
+    ++fragments;
+    const Rgba8 c = shade(uint32_t(hits[i].triangle));
+    const double alpha = c.a / 255.0, w = through * alpha;
+    r += w * c.r;
+    g += w * c.g;
+    b += w * c.b;
+    a += w;
+    through *= 1 - alpha;
+  }
+  const double bgAlpha = background.a / 255.0;
+  r += through * bgAlpha * background.r;
+  g += through * bgAlpha * background.g;
+  b += through * bgAlpha * background.b;
+  a += through * bgAlpha;
+  // Colour channels as the 8-bit "over" stores them: not divided by alpha (an opaque background
+  // makes a = 1).
+  auto byte = [](double v) { return uint8_t(std::clamp(std::lround(v), 0l, 255l)); };
+  return {byte(r), byte(g), byte(b), byte(255 * a)};
+}
+
+void abuffer(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams&,
+             Frame& frame) {
+  Timer timer;
+  frame.resize(camera.width, camera.height, options.background, resolveThreads(options.threads));
+  const CameraSpaceBvh bvh(scene, camera);
+  Stats& st = frame.stats;
+  st.addTime("build", timer.lap());
+  struct RowCounters {
+    TraceCounters trace;
+    uint64_t covered = 0, fragments = 0, deepest = 0;
+  };
+  std::vector<RowCounters> rows(size_t(camera.height));
+  const TriangleShader shade(scene, camera, options.shading);
+  parallelFor(0, size_t(camera.height), resolveThreads(options.threads), [&](size_t y) {
+    RowCounters& row = rows[y];
+    std::vector<RayHit> hits;
+    for (int x = 0; x < camera.width; ++x) {
+      hits.clear();
+      bvh.allPixelHits(x + 0.5, double(y) + 0.5, options.cull, hits, row.trace);
+      if (hits.empty()) continue;
+      const size_t idx = frame.index(x, int(y));
+      const uint64_t before = row.fragments;
+      frame.color[idx] = blendFragments(hits, scene, shade, options.background, row.fragments);
+      row.deepest = std::max(row.deepest, row.fragments - before);
+      const RayHit& nearest = hits.front();
+      frame.faceId[idx] = int32_t(scene.triangles[size_t(nearest.triangle)].face);
+      frame.triangleId[idx] = nearest.triangle;
+      frame.depth[idx] = float(nearest.t);
+      if (!frame.writes.empty()) frame.writes[idx] = 1;
+      ++row.covered;
+    }
+  });
+  st.addTime("trace", timer.lap());
+  st.triangles_degenerate = bvh.degenerateTriangles();
+  uint64_t fragments = 0, deepest = 0;
+  for (const RowCounters& row : rows) {
+    st.depth_tests += row.trace.tests;
+    st.covered_pixels += row.covered;
+    fragments += row.fragments;
+    deepest = std::max(deepest, row.deepest);
+  }
+  st.color_writes = st.covered_pixels;
+  st.setDetail("fragments", fragments);
+  st.setDetail("deepest_pixel", deepest);
+  const uint64_t pixels = uint64_t(camera.width) * uint64_t(camera.height);
+  st.memory_bytes = bvh.memoryBytes() + pixels * (2 * sizeof(int32_t) + sizeof(float) + sizeof(Rgba8));
+}
+
+}  // namespace
+
+AlgorithmInfo abufferAlgorithm() {
+  AlgorithmInfo a;
+  a.name = "abuffer";
+  a.summary = "A-buffer: every fragment of every pixel, sorted by exact depth, blended front to back in double; "
+              "the exact colour reference for transparency";
+  a.source = "KTH report, lecture notes";
+  a.guarantee.kind = Guarantee::Kind::Exact;
+  a.guarantee.condition = "its ids are the reference's nearest fragments";
+  a.run = abuffer;
+  return a;
+}
+
+}  // namespace hsr::algo
