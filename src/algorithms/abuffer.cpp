@@ -54,8 +54,48 @@ Rgba8 blendFragments(std::vector<RayHit>& hits, const Scene& scene, const Triang
   return {byte(r), byte(g), byte(b), byte(255 * a)};
 }
 
+// Whether the pixel's fragments (sorted by depth) may blend in another order or another set in
+// a rasterizer: two faces at one depth (within 1e-9 of it), or the pixel centre within 1/128
+// pixel of an edge of a fragment's triangle as projected (each edge clipped to the near plane
+// first), where snapped coverage may take or leave it — as --verify's ambiguous pixels.
+bool nearAnEdge(const Scene& scene, const Camera& camera, const std::vector<RayHit>& hits, double px, double py) {
+  constexpr double kEdge = 1.0 / 128;
+  // Fragments of different faces at one depth (coplanar faces, or a shared edge): either order.
+  for (size_t i = 1; i < hits.size(); ++i)
+    if (hits[i].t - hits[i - 1].t <= 1e-9 * hits[i].t &&
+        scene.triangles[size_t(hits[i].triangle)].face != scene.triangles[size_t(hits[i - 1].triangle)].face)
+      return true;
+  for (const RayHit& hit : hits) {
+    const Triangle& tri = scene.triangles[size_t(hit.triangle)];
+    dvec3 c[3];
+    for (int k = 0; k < 3; ++k) c[k] = camera.toCamera(scene.positions[tri.v[k]]);
+    for (int k = 0; k < 3; ++k) {
+      dvec3 a = c[k], b = c[(k + 1) % 3];
+      if (!camera.orthographic) {
+        if (a.z < camera.near && b.z < camera.near) continue;
+        if (a.z < camera.near) a += (b - a) * ((camera.near - a.z) / (b.z - a.z));
+        if (b.z < camera.near) b += (a - b) * ((camera.near - b.z) / (a.z - b.z));
+      }
+      const dvec4 ha = camera.pixelFromCamera * dvec4(a, 1.0), hb = camera.pixelFromCamera * dvec4(b, 1.0);
+      const dvec2 pa = dvec2(ha) / ha.w, pb = dvec2(hb) / hb.w, p(px, py), e = pb - pa;
+      const double length2 = glm::dot(e, e);
+      const double t = length2 > 0 ? std::clamp(glm::dot(p - pa, e) / length2, 0.0, 1.0) : 0.0;
+      if (glm::length(p - (pa + t * e)) <= kEdge) return true;
+    }
+  }
+  return false;
+}
+
 void abuffer(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams&,
              Frame& frame) {
+  abufferFrame(scene, camera, options, frame, nullptr);
+}
+
+}  // namespace
+
+void abufferFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame,
+                  std::vector<uint8_t>* nearEdge) {
+  if (nearEdge) nearEdge->assign(size_t(camera.width) * size_t(camera.height), 0);
   Timer timer;
   frame.resize(camera.width, camera.height, options.background, resolveThreads(options.threads));
   const CameraSpaceBvh bvh(scene, camera);
@@ -76,7 +116,8 @@ void abuffer(const Scene& scene, const Camera& camera, const RenderOptions& opti
       if (hits.empty()) continue;
       const size_t idx = frame.index(x, int(y));
       const uint64_t before = row.fragments;
-      frame.color[idx] = blendFragments(hits, scene, shade, options.background, row.fragments);
+      frame.color[idx] = blendFragments(hits, scene, shade, options.background, row.fragments);  // sorts hits
+      if (nearEdge) (*nearEdge)[idx] = nearAnEdge(scene, camera, hits, x + 0.5, double(y) + 0.5);
       row.deepest = std::max(row.deepest, row.fragments - before);
       const RayHit& nearest = hits.front();
       frame.faceId[idx] = int32_t(scene.triangles[size_t(nearest.triangle)].face);
@@ -102,7 +143,6 @@ void abuffer(const Scene& scene, const Camera& camera, const RenderOptions& opti
   st.memory_bytes = bvh.memoryBytes() + pixels * (2 * sizeof(int32_t) + sizeof(float) + sizeof(Rgba8));
 }
 
-}  // namespace
 
 AlgorithmInfo abufferAlgorithm() {
   AlgorithmInfo a;

@@ -27,16 +27,23 @@ AlgorithmInfo abufferAlgorithm();         // abuffer.cpp: the exact colour refer
 bool hasTransparency(const Scene& scene);
 
 /// The colour error of `frame` against the A-buffer's `reference` (verify.cpp), over the pixels
-/// whose face id is the reference's (the others are the id check's: wrong or ambiguous): per
+/// whose face id is the reference's (the others are the id check's: wrong or ambiguous) and,
+/// with `nearEdge`, that are not marked in it: per
 /// channel the largest and the mean absolute difference, and the pixels where some channel
 /// differs by more than one 8-bit step.
 struct ColorError {
-  uint64_t pixels = 0;  // compared
+  uint64_t pixels = 0;    // compared
+  uint64_t nearEdge = 0;  // not compared: a fragment's edge within 1/128 pixel of the centre (abufferFrame)
   int max[3] = {0, 0, 0};
   double mean[3] = {0, 0, 0};
   uint64_t beyondStep = 0;
 };
-ColorError colorError(const Frame& frame, const Frame& reference);
+ColorError colorError(const Frame& frame, const Frame& reference, const std::vector<uint8_t>* nearEdge = nullptr);
+/// The A-buffer's frame (abuffer.cpp); with `nearEdge`, per pixel 1 where the centre is within
+/// 1/128 pixel of a projected edge of one of its fragments' triangles (a rasterizer's snapped
+/// coverage may differ there, as for --verify's ambiguous pixels).
+void abufferFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame,
+                  std::vector<uint8_t>* nearEdge);
 
 /// The scene's BSP tree (built once per scene and options, bsp.cpp) drawn in its order from the
 /// camera, back to front or front to back, under `rule`; fills the statistics and the tree's

@@ -206,13 +206,17 @@ VerifyResult verifyAgainstReference(const Scene& scene, const Camera& camera, co
 
 namespace algo {
 
-ColorError colorError(const Frame& frame, const Frame& reference) {
+ColorError colorError(const Frame& frame, const Frame& reference, const std::vector<uint8_t>* nearEdge) {
   ColorError e;
   const size_t n = std::min(frame.color.size(), reference.color.size());
   uint64_t sum[3] = {0, 0, 0};
   const bool ids = frame.faceId.size() == n && reference.faceId.size() == n;
   for (size_t i = 0; i < n; ++i) {
     if (ids && frame.faceId[i] != reference.faceId[i]) continue;  // a wrong or ambiguous pixel: the id check's
+    if (nearEdge && (*nearEdge)[i]) {
+      ++e.nearEdge;
+      continue;
+    }
     ++e.pixels;
     const Rgba8 a = frame.color[i], b = reference.color[i];
     const int d[3] = {std::abs(int(a.r) - int(b.r)), std::abs(int(a.g) - int(b.g)), std::abs(int(a.b) - int(b.b))};
