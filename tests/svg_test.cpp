@@ -135,6 +135,41 @@ TEST_F(SvgTest, NewellAndBspDecodeToTheReferenceAwayFromEdges) {
     }
 }
 
+// Translucent faces become fill-opacity, and the SVG renderer blends newell's order as the
+// A-buffer does: within one 8-bit step away from edges on builtin:glass.
+TEST_F(SvgTest, NewellsTranslucentSvgBlendsAsTheAbuffer) {
+  const Scene scene = loadScene("builtin:glass");
+  const int w = 200, h = 150;
+  const Camera camera = resolveCamera(*scene.camera, w, h, scene.bounds());
+  RenderOptions options;
+  options.algorithm = "newell";
+  const std::string svgPath = path("glass.svg"), pngPath = path("glass.png");
+  writeSvg(scene, camera, options, svgPath);
+  std::ifstream in(svgPath);
+  const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(svg.find("fill-opacity=\""), std::string::npos);
+  const std::string command = "rsvg-convert '" + svgPath + "' -o '" + pngPath + "'";
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  int pw = 0, ph = 0, channels = 0;
+  unsigned char* pixels = stbi_load(pngPath.c_str(), &pw, &ph, &channels, 3);
+  ASSERT_TRUE(pixels && pw == w && ph == h);
+  RenderOptions ref;
+  ref.algorithm = "abuffer";
+  const Frame reference = render(scene, camera, ref);
+  const std::vector<bool> edge = nearEdges(parsePolygons(svg), w, h);
+  uint64_t tested = 0, beyond = 0;
+  for (size_t i = 0; i < size_t(w) * size_t(h); ++i) {
+    if (edge[i]) continue;
+    ++tested;
+    const Rgba8 want = reference.color[i];
+    const unsigned char* got = pixels + 3 * i;
+    beyond += std::abs(got[0] - want.r) > 1 || std::abs(got[1] - want.g) > 1 || std::abs(got[2] - want.b) > 1;
+  }
+  stbi_image_free(pixels);
+  EXPECT_EQ(beyond, 0u) << "of " << tested;
+  EXPECT_GT(tested, uint64_t(w * h) / 2);
+}
+
 // The check can fail: the painter's SVG of its cycle is wrong away from edges too.
 TEST_F(SvgTest, PainterOnItsCycleDecodesWrong) {
   const Scene scene = loadScene("builtin:painter-cycle");

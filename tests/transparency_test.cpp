@@ -140,7 +140,11 @@ TEST(Transparency, ZbufferFamilysSortedPassIsWrongOnGlass) {
     options.verify = true;
     const Frame checked = render(scene, camera, options);
     EXPECT_EQ(checked.stats.wrong_pixels.value_or(1), 0u) << algorithm;
-    EXPECT_EQ(checked.stats.detailCount("verify_color_beyond_step").value_or(0), e.beyondStep) << algorithm;
+    // --verify leaves out the colour-ambiguous pixels (near an edge, coplanar fragments).
+    const uint64_t verified = checked.stats.detailCount("verify_color_beyond_step").value_or(0);
+    EXPECT_GT(verified, 200u) << algorithm;
+    EXPECT_LE(verified, e.beyondStep) << algorithm;
+    EXPECT_GT(checked.stats.detailCount("verify_color_near_edge").value_or(0), 0u) << algorithm;
   }
 }
 
