@@ -55,9 +55,10 @@ Rgba8 blendFragments(std::vector<RayHit>& hits, const Scene& scene, const Triang
 }
 
 // Whether the pixel's fragments (sorted by depth) may blend in another order or another set in
-// a rasterizer: two faces at one depth (within 1e-9 of it), or the pixel centre within 1/128
-// pixel of an edge of a fragment's triangle as projected (each edge clipped to the near plane
-// first), where snapped coverage may take or leave it — as --verify's ambiguous pixels.
+// a rasterizer: two faces at one depth (within 1e-9 of it), or whose order changes within 1/128
+// pixel of the centre (they cross there), or the centre within 1/128 pixel of an edge of a
+// fragment's triangle as projected (each edge clipped to the near plane first), where snapped
+// coverage may take or leave it — as --verify's ambiguous pixels.
 bool nearAnEdge(const Scene& scene, const Camera& camera, const std::vector<RayHit>& hits, double px, double py) {
   constexpr double kEdge = 1.0 / 128;
   // Fragments of different faces at one depth (coplanar faces, or a shared edge): either order.
@@ -65,6 +66,31 @@ bool nearAnEdge(const Scene& scene, const Camera& camera, const std::vector<RayH
     if (hits[i].t - hits[i - 1].t <= 1e-9 * hits[i].t &&
         scene.triangles[size_t(hits[i].triangle)].face != scene.triangles[size_t(hits[i - 1].triangle)].face)
       return true;
+  // Two fragments whose depth order changes within 1/128 pixel of the centre (the line where two
+  // faces cross passes there): a rasterizer's snapped pieces may order them either way.
+  if (hits.size() >= 2) {
+    const dvec2 offsets[4] = {{kEdge, kEdge}, {-kEdge, kEdge}, {kEdge, -kEdge}, {-kEdge, -kEdge}};
+    std::vector<dvec4> planes;  // camera space: n . x = w
+    for (const RayHit& hit : hits) {
+      const Triangle& tri = scene.triangles[size_t(hit.triangle)];
+      const dvec3 a = camera.toCamera(scene.positions[tri.v[0]]), b = camera.toCamera(scene.positions[tri.v[1]]),
+                  c = camera.toCamera(scene.positions[tri.v[2]]);
+      const dvec3 n = glm::cross(b - a, c - a);
+      planes.emplace_back(n, glm::dot(n, a));
+    }
+    auto depthAt = [&](const dvec4& plane, dvec2 p) {
+      dvec3 origin, dir;
+      camera.cameraRay(p.x, p.y, origin, dir);
+      return (plane.w - glm::dot(dvec3(plane), origin)) / glm::dot(dvec3(plane), dir);
+    };
+    for (const dvec2& o : offsets) {
+      const dvec2 p = dvec2(px, py) + o;
+      for (size_t i = 1; i < hits.size(); ++i)
+        if (depthAt(planes[i], p) < depthAt(planes[i - 1], p) &&
+            scene.triangles[size_t(hits[i].triangle)].face != scene.triangles[size_t(hits[i - 1].triangle)].face)
+          return true;
+    }
+  }
   for (const RayHit& hit : hits) {
     const Triangle& tri = scene.triangles[size_t(hit.triangle)];
     dvec3 c[3];
