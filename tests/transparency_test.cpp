@@ -122,6 +122,26 @@ TEST(Transparency, NewellAndBspBlendWithinRoundingOfTheAbuffer) {
   }
 }
 
+// Many translucent layers: 300 random triangles at opacity 0.5, --verify's colour error (its
+// ambiguous pixels left out) within one step for newell and bsp.
+TEST(Transparency, NewellAndBspVerifyWithinOneStepOnTranslucentRandomTriangles) {
+  Scene scene = loadScene("builtin:random?n=300&seed=5");
+  for (Rgba8& c : scene.faceColors) c.a = 128;
+  for (const conformance::Pose& pose : conformance::posesAround(scene, 3, 4)) {
+    const Camera camera = resolveCamera(pose.spec, 160, 120, scene.bounds());
+    for (const char* algorithm : {"newell", "bsp"}) {
+      RenderOptions options;
+      options.algorithm = algorithm;
+      options.verify = true;
+      const Frame f = render(scene, camera, options);
+      EXPECT_EQ(f.stats.wrong_pixels.value_or(1), 0u) << algorithm;
+      EXPECT_EQ(f.stats.detailCount("verify_color_beyond_step").value_or(1), 0u)
+          << algorithm << "\n" << cameraSpecToJson(pose.spec);
+      EXPECT_GT(f.stats.detailCount("verify_color_pixels").value_or(0), uint64_t(160 * 120) * 3 / 4) << algorithm;
+    }
+  }
+}
+
 // A known, explained mismatch: opaque first, then transparent faces sorted by one depth each,
 // depth-tested without depth writes, blends the glass scene's cycle and interpenetration in the
 // wrong order — while its ids (the nearest fragment) stay exact.

@@ -55,7 +55,7 @@ Rgba8 blendFragments(std::vector<RayHit>& hits, const Scene& scene, const Triang
 }
 
 // Whether the pixel's fragments (sorted by depth) may blend in another order or another set in
-// a rasterizer: two faces at one depth (within 1e-9 of it), or whose order changes within 1/128
+// a rasterizer (with facesChangeNearby below): two faces at one depth (within 1e-9 of it), or whose order changes within 1/128
 // pixel of the centre (they cross there), or the centre within 1/128 pixel of an edge of a
 // fragment's triangle as projected (each edge clipped to the near plane first), where snapped
 // coverage may take or leave it — as --verify's ambiguous pixels.
@@ -112,6 +112,29 @@ bool nearAnEdge(const Scene& scene, const Camera& camera, const std::vector<RayH
   return false;
 }
 
+// Whether the faces met by the rays through the four points 1/128 pixel diagonally off the
+// centre are not the centre's: a face's edge passes that close, hit or not at the centre (a
+// rasterizer's snapped coverage may then take or leave it).
+bool facesChangeNearby(const CameraSpaceBvh& bvh, const Scene& scene, Cull cull, const std::vector<RayHit>& hits,
+                       double px, double py, TraceCounters& counters) {
+  constexpr double kEdge = 1.0 / 128;
+  auto facesOf = [&](const std::vector<RayHit>& h) {
+    std::vector<uint32_t> faces;
+    for (const RayHit& hit : h) faces.push_back(scene.triangles[size_t(hit.triangle)].face);
+    std::sort(faces.begin(), faces.end());
+    faces.erase(std::unique(faces.begin(), faces.end()), faces.end());
+    return faces;
+  };
+  const std::vector<uint32_t> centre = facesOf(hits);
+  std::vector<RayHit> near;
+  for (const dvec2 o : {dvec2(kEdge, kEdge), dvec2(-kEdge, kEdge), dvec2(kEdge, -kEdge), dvec2(-kEdge, -kEdge)}) {
+    near.clear();
+    bvh.allPixelHits(px + o.x, py + o.y, cull, near, counters);
+    if (facesOf(near) != centre) return true;
+  }
+  return false;
+}
+
 void abuffer(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams&,
              Frame& frame) {
   abufferFrame(scene, camera, options, frame, nullptr);
@@ -143,7 +166,9 @@ void abufferFrame(const Scene& scene, const Camera& camera, const RenderOptions&
       const size_t idx = frame.index(x, int(y));
       const uint64_t before = row.fragments;
       frame.color[idx] = blendFragments(hits, scene, shade, options.background, row.fragments);  // sorts hits
-      if (nearEdge) (*nearEdge)[idx] = nearAnEdge(scene, camera, hits, x + 0.5, double(y) + 0.5);
+      if (nearEdge)
+        (*nearEdge)[idx] = nearAnEdge(scene, camera, hits, x + 0.5, double(y) + 0.5) ||
+                           facesChangeNearby(bvh, scene, options.cull, hits, x + 0.5, double(y) + 0.5, row.trace);
       row.deepest = std::max(row.deepest, row.fragments - before);
       const RayHit& nearest = hits.front();
       frame.faceId[idx] = int32_t(scene.triangles[size_t(nearest.triangle)].face);
