@@ -4,6 +4,7 @@
 // status follow docs/conventions.md "Command line": 0 success, 2 bad usage or input, 1 otherwise.
 #include <hsr/hsr.hpp>
 
+#include "commands.hpp"
 #include "core/parallel.hpp"
 
 #include <CLI/CLI.hpp>
@@ -308,6 +309,7 @@ using Runner = std::function<int()>;
 struct RenderFlags {
   ViewFlags view;
   std::string out, ids, depth, depthImage, overdrawImage, stats, svg;
+  std::string instanceIds, barycentric;  // attributes resolved from the ids (hsr/views.hpp)
   bool verify = false, quiet = false, json = false;
 };
 
@@ -331,6 +333,33 @@ void printSummary(const Job& job, const hsr::Stats& s, double wallMs, const std:
   if (s.wrong_pixels)
     fmt::print("  verify: {} wrong pixels, {} ambiguous\n", *s.wrong_pixels, s.ambiguous_pixels.value_or(0));
   if (!written.empty()) fmt::print("  wrote {}\n", fmt::join(written, ", "));
+}
+
+// --instance-ids and --barycentric: their file names, and the ids they are resolved from.
+void checkAttributeOutputs(const RenderFlags& f, hsr::FrameOutputs kept) {
+  if (!f.instanceIds.empty()) {
+    hsr::checkInstanceIdsPath(f.instanceIds);
+    if (!has(kept, hsr::FrameOutputs::FaceIds))
+      throw InputError("--instance-ids: the outputs kept (" + hsr::frameOutputsName(kept) + ") have no face ids (add face)");
+  }
+  if (!f.barycentric.empty()) {
+    hsr::checkBarycentricsPath(f.barycentric);
+    if (!has(kept, hsr::FrameOutputs::TriangleIds))
+      throw InputError("--barycentric: the outputs kept (" + hsr::frameOutputsName(kept) +
+                       ") have no triangle ids (add triangle)");
+  }
+}
+
+void writeAttributeOutputs(const RenderFlags& f, const Job& job, const hsr::Frame& frame,
+                           std::vector<std::string>& written) {
+  if (!f.instanceIds.empty()) {
+    hsr::writeInstanceIds(frame, hsr::faceMeshIndices(job.scene), f.instanceIds);
+    written.push_back(f.instanceIds);
+  }
+  if (!f.barycentric.empty()) {
+    hsr::writeBarycentrics(job.scene, job.camera, frame, f.barycentric);
+    written.push_back(f.barycentric);
+  }
 }
 
 int runRender(const RenderFlags& f) {
@@ -357,6 +386,7 @@ int runRender(const RenderFlags& f) {
     throw InputError("--ids: --outputs " + f.view.outputs + " keeps no face ids (add face)");
   if (f.verify && !has(kept, hsr::FrameOutputs::IdsAndDepth))
     throw InputError("--verify compares face and triangle ids: --outputs " + f.view.outputs + " lacks face or triangle");
+  checkAttributeOutputs(f, kept);
 
   if (!f.svg.empty()) hsr::checkSvgPath(f.svg);
 
@@ -382,6 +412,7 @@ int runRender(const RenderFlags& f) {
     o.write(frame, o.path);
     written.push_back(o.path);
   }
+  writeAttributeOutputs(f, job, frame, written);
   const std::string statsJson = frame.stats.toJson();
   if (!f.stats.empty()) {
     hsr::writeTextFile(statsJson + "\n", f.stats);
@@ -414,6 +445,16 @@ Runner setupRender(CLI::App& cmd) {
                  "4, red 5, magenta 6, white 7 or more")
       ->type_name("OVERDRAW.png")
       ->group(outputs);
+  cmd.add_option("--instance-ids", f->instanceIds,
+                 "Instance ids: per pixel the mesh its face belongs to (its position among the scene's meshes, as "
+                 "'hsr info' lists them); PNG (24-bit id+1, 0 = background) or .npy (int32, -1)")
+      ->type_name("INST.png|.npy")
+      ->group(outputs);
+  cmd.add_option("--barycentric", f->barycentric,
+                 "Barycentric coordinates of each pixel centre on the visible triangle, float32 (H, W, 3), 0 on the "
+                 "background; for a triangle face, of its vertices in file order (--ids names the face)")
+      ->type_name("BARY.npy")
+      ->group(outputs);
   cmd.add_option("--stats", f->stats, "Statistics JSON")->type_name("STATS.json")->group(outputs);
   cmd.add_option("--svg", f->svg,
                  "Vector image: the painting order of painter, newell or bsp as SVG polygons, back to front "
@@ -440,59 +481,96 @@ struct BenchFlags {
   ViewFlags view;
   int frames = 10, warmup = 2;
   double warmupSeconds = 1;  // and at least this long (see setupBench)
-  bool json = false, occlusion = false;
+  bool json = false, occlusion = false, orbit = false;
 };
 
-// The CPU's model name (Linux /proc/cpuinfo; "unknown" elsewhere), for benchmark records.
-std::string cpuModel() {
-  std::ifstream in("/proc/cpuinfo");
-  for (std::string line; std::getline(in, line);)
-    if (const size_t colon = line.find(':'); line.rfind("model name", 0) == 0 && colon != std::string::npos)
-      if (const size_t start = line.find_first_not_of(' ', colon + 1); start != std::string::npos)
-        return line.substr(start);
-  return "unknown";
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  return n == 0 ? 0 : n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
-int runBench(const BenchFlags& f) {
-  Job job = f.view.prepare();
+// What a benchmark measured: whole frames, each frame's stages (Stats::time_ms), and the first
+// frame of the process apart (it builds what later frames reuse, such as a BSP tree).
+struct BenchRecord {
   std::vector<double> frameMs;
-  hsr::Frame frame;
+  std::vector<std::pair<std::string, std::vector<double>>> stageMs;  // in pipeline order
+  double firstMs = 0;
+  std::vector<std::pair<std::string, double>> firstStages;
+  int warmupFrames = 0;
+  double warmupMs = 0;
+  int poses = 1;
+
+  void addStages(const hsr::Stats& stats) {
+    for (const auto& [stage, ms] : stats.time_ms) {
+      auto it = std::find_if(stageMs.begin(), stageMs.end(), [&](const auto& s) { return s.first == stage; });
+      if (it == stageMs.end()) it = stageMs.insert(stageMs.end(), {stage, {}});
+      it->second.push_back(ms);
+    }
+  }
+};
+
+BenchRecord timeFrames(const BenchFlags& f, const Job& job, hsr::Frame& frame) {
   hsr::OcclusionBuffer occlusion;
-  if (f.occlusion && (job.options.algorithm != "zbuffer" || !job.options.params.empty()))
-    throw hsr::InputError("--occlusion: times the occlusion buffer (the tiled z-buffer, depth only); drop "
-                          "--algorithm and --param");
-  auto renderOnce = [&] {
+  BenchRecord rec;
+  // --orbit: every frame from another side of the scene, poses evenly around it.
+  const std::vector<hsr::Camera> cameras =
+      f.orbit ? hsr::orbitCameras(job.camera, job.scene.bounds().center(), f.frames) : std::vector{job.camera};
+  rec.poses = int(cameras.size());
+  int rendered = 0;
+  // One frame, timed; the first of the process is recorded apart.
+  auto renderOnce = [&](size_t pose) {
+    const auto start = std::chrono::steady_clock::now();
+    const hsr::Camera& camera = cameras[pose % cameras.size()];
     if (f.occlusion)  // depth kept in tiles, no image: what an occlusion culler pays per frame
-      occlusion.render(job.scene, job.camera, {job.options.depthFormat, job.options.cull, job.options.threads});
+      occlusion.render(job.scene, camera, {job.options.depthFormat, job.options.cull, job.options.threads});
     else
-      hsr::render(job.scene, job.camera, job.options, frame);  // reuses the frame's buffers
+      hsr::render(job.scene, camera, job.options, frame);  // reuses the frame's buffers
+    const double ms = millisecondsSince(start);
+    if (rendered++ == 0) {
+      rec.firstMs = ms;
+      if (!f.occlusion) rec.firstStages = frame.stats.time_ms;
+    }
+    return ms;
   };
   // Warm-up: f.warmup frames, and more until f.warmupSeconds have passed.
   const auto warmupStart = std::chrono::steady_clock::now();
-  int warmupFrames = 0;
-  while (warmupFrames < f.warmup || (f.warmupSeconds > 0 && millisecondsSince(warmupStart) < 1e3 * f.warmupSeconds)) {
-    renderOnce();
-    ++warmupFrames;
-  }
-  const double warmupMs = millisecondsSince(warmupStart);
+  while (rec.warmupFrames < f.warmup || (f.warmupSeconds > 0 && millisecondsSince(warmupStart) < 1e3 * f.warmupSeconds))
+    renderOnce(size_t(rec.warmupFrames++));
+  rec.warmupMs = millisecondsSince(warmupStart);
   for (int i = 0; i < f.frames; ++i) {
-    auto start = std::chrono::steady_clock::now();
-    renderOnce();
-    frameMs.push_back(millisecondsSince(start));
+    rec.frameMs.push_back(renderOnce(size_t(i)));
+    if (!f.occlusion) rec.addStages(frame.stats);
   }
   if (f.occlusion) occlusion.depthImage(frame);  // its statistics, with covered_pixels (not timed)
-  std::vector<double> sorted = frameMs;
-  std::sort(sorted.begin(), sorted.end());
-  size_t n = sorted.size();
-  double median = n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
-  int threads = hsr::resolveThreads(job.options.threads);
+  return rec;
+}
 
-  if (!f.json) {
-    fmt::print("{} on {}: {}x{}, {} threads: median {:.3f} ms, min {:.3f} ms over {} frames ({} warm-up in {:.2f} s)\n",
-               frame.stats.algorithm, job.sceneName, frame.width, frame.height, threads, median, sorted.front(),
-               n, warmupFrames, warmupMs / 1e3);
-    return 0;
-  }
+// The stages every timed frame ran (a stage of only some frames, such as a build, is the first frame's).
+bool everyFrame(const BenchRecord& rec, const std::vector<double>& stageMs) { return stageMs.size() == rec.frameMs.size(); }
+
+std::string stageText(const BenchRecord& rec) {
+  std::string text;
+  for (const auto& [stage, ms] : rec.stageMs)
+    if (everyFrame(rec, ms)) text += fmt::format("{}{} {:.3f}", text.empty() ? "" : ", ", stage, median(ms));
+  return text;
+}
+
+void printBenchText(const BenchRecord& rec, const Job& job, const hsr::Frame& frame, int threads) {
+  const double min = *std::min_element(rec.frameMs.begin(), rec.frameMs.end());
+  fmt::print("{} on {}: {}x{}, {} threads{}: median {:.3f} ms, min {:.3f} ms over {} frames ({} warm-up in {:.2f} s)\n",
+             frame.stats.algorithm, job.sceneName, frame.width, frame.height, threads,
+             rec.poses > 1 ? fmt::format(", an orbit of {} poses", rec.poses) : "", median(rec.frameMs), min,
+             rec.frameMs.size(), rec.warmupFrames, rec.warmupMs / 1e3);
+  if (rec.stageMs.empty()) return;
+  fmt::print("  per frame, median ms: {}\n", stageText(rec));
+  std::string first;
+  for (const auto& [stage, ms] : rec.firstStages)
+    if (stage == "build") first = fmt::format(" (build {:.3f} ms, once: later frames reuse it)", ms);
+  fmt::print("  first frame: {:.3f} ms{}\n", rec.firstMs, first);
+}
+
+Json benchJson(const BenchRecord& rec, const Job& job, const hsr::Frame& frame, int threads) {
   // Every figure travels with what produced it: scene, size, threads, build.
   Json out;
   out["scene"] = job.sceneName;
@@ -500,13 +578,21 @@ int runBench(const BenchFlags& f) {
   out["threads"] = threads;
   out["outputs"] = hsr::frameOutputsName(job.options.outputs);
   out["kernel_isa"] = hsr::kernelInstructionSet();
-  out["cpu"] = cpuModel();
-  out["frames"] = n;
-  out["warmup"] = warmupFrames;
-  out["warmup_ms"] = warmupMs;
-  out["median_ms"] = median;
-  out["min_ms"] = sorted.front();
-  out["frame_ms"] = frameMs;
+  out["cpu"] = hsr::cli::cpuModel();
+  out["frames"] = rec.frameMs.size();
+  out["poses"] = rec.poses;
+  out["warmup"] = rec.warmupFrames;
+  out["warmup_ms"] = rec.warmupMs;
+  out["median_ms"] = median(rec.frameMs);
+  out["min_ms"] = *std::min_element(rec.frameMs.begin(), rec.frameMs.end());
+  out["frame_ms"] = rec.frameMs;
+  out["first_frame_ms"] = rec.firstMs;
+  Json firstStages = Json::object(), stages = Json::object();
+  for (const auto& [stage, ms] : rec.firstStages) firstStages[stage] = ms;
+  for (const auto& [stage, ms] : rec.stageMs)
+    if (everyFrame(rec, ms)) stages[stage] = median(ms);
+  out["first_frame_stages_ms"] = firstStages;
+  out["stage_median_ms"] = stages;
   out["build"] = {{"version", HSR_VERSION},
                   {"build_type", HSR_BUILD_TYPE},
                   {"flags", HSR_BUILD_FLAGS},
@@ -524,7 +610,21 @@ int runBench(const BenchFlags& f) {
   const Json stats = Json::parse(frame.stats.toJson());
   for (const auto& [key, value] : stats.items())
     if (!out.contains(key)) out[key] = value;
-  fmt::print("{}\n", out.dump(2));
+  return out;
+}
+
+int runBench(const BenchFlags& f) {
+  Job job = f.view.prepare();
+  if (f.occlusion && (job.options.algorithm != "zbuffer" || !job.options.params.empty()))
+    throw hsr::InputError("--occlusion: times the occlusion buffer (the tiled z-buffer, depth only); drop "
+                          "--algorithm and --param");
+  hsr::Frame frame;
+  const BenchRecord rec = timeFrames(f, job, frame);
+  const int threads = hsr::resolveThreads(job.options.threads);
+  if (f.json)
+    fmt::print("{}\n", benchJson(rec, job, frame, threads).dump(2));
+  else
+    printBenchText(rec, job, frame, threads);
   return 0;
 }
 
@@ -542,15 +642,20 @@ Runner setupBench(CLI::App& cmd) {
   cmd.add_flag("--occlusion", f->occlusion,
                "Time the occlusion buffer (hsr::OcclusionBuffer::render): the tiled z-buffer's depth only, kept in "
                "tiles, no image written (what an occlusion culler pays per frame)");
+  cmd.add_flag("--orbit", f->orbit,
+               "Render each timed frame from another pose: --frames poses evenly around the scene (the camera "
+               "turned about its up axis through the scene's centre), so what an algorithm builds once per scene "
+               "(a BSP tree) is timed apart from what it does per view");
   cmd.add_flag("--json", f->json,
-               "Print one JSON object: median_ms, min_ms, frames, frame_ms, threads, scene, size, build and the "
-               "last frame's statistics");
+               "Print one JSON object: median_ms, min_ms, frames, frame_ms, stage_median_ms, first_frame_ms, "
+               "first_frame_stages_ms, poses, threads, scene, size, build and the last frame's statistics");
   cmd.footer(
       "Times are wall-clock milliseconds of whole render() calls (with --occlusion, of OcclusionBuffer::render "
       "calls).\n\n"
       "Examples:\n"
       "  hsr bench builtin:cubes --frames 20\n"
       "  hsr bench builtin:sphere --size 1920x1080 --outputs depth,face,color\n"
+      "  hsr bench builtin:city --size 1920x1080 --algorithm bsp --orbit --frames 20\n"
       "  hsr bench model.obj --camera cam.json --size 1920x1080 --algorithm zbuffer --threads 1 --json");
   return [f] { return runBench(*f); };
 }
@@ -738,6 +843,10 @@ const Subcommand kSubcommands[] = {
     {"algorithms", "List the visibility algorithms: parameters, sources and guarantees", setupAlgorithms},
     {"scenes", "List the built-in scenes and their parameters", setupScenes},
     {"info", "Describe a scene: counts, meshes, bounds, problems, camera", setupInfo},
+    {"compare", "The documents' comparisons: every algorithm on the study's scenes, a table, results.json and an "
+                "HTML report", hsr::cli::setupCompare},
+    {"precision", "Depth precision per format: separable depth differences and the spread of stored values",
+     hsr::cli::setupPrecision},
     {"help", "Explain hsr or one of its commands", setupHelp},
 };
 

@@ -1,16 +1,10 @@
 #!/usr/bin/env bash
-# The main job: builds hsr, then renders every built-in scene with the z-buffer into ./out
-# (colour, depth picture, face ids, depth, statistics) and prints their statistics.
-# Usage: scripts/main.sh [SIZE, default 1280x720]
+# The main job: builds hsr, then runs `hsr compare`'s default study — the source documents'
+# comparisons on built-in scenes, every algorithm checked against the exact reference — into
+# out/study/ (results.json and the report index.html), and prints its table and claims.
+# Usage: scripts/main.sh [extra hsr compare flags, e.g. --frames 5]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/build.sh
-size="${1:-1280x720}"
-mkdir -p out
-for scene in $(build/hsr scenes --names); do
-  echo "== builtin:$scene"
-  build/hsr render "builtin:$scene" --size "$size" --algorithm zbuffer \
-    --out "out/$scene.png" --depth-image "out/$scene-depth.png" --ids "out/$scene-ids.png" \
-    --depth "out/$scene-depth.npy" --stats "out/$scene-stats.json"
-done
-echo "images and statistics in $(pwd)/out"
+build/hsr compare --out out/study "$@"
+echo "open $(pwd)/out/study/index.html"

@@ -15,10 +15,12 @@ TEST(Algorithms, RegistryDeclaresZBufferAndRaycast) {
   ASSERT_NE(z, nullptr);
   ASSERT_NE(r, nullptr);
   EXPECT_EQ(z->guarantee.kind, Guarantee::Kind::Exact);
-  ASSERT_EQ(z->params.size(), 1u);
+  ASSERT_EQ(z->params.size(), 2u);
   EXPECT_EQ(z->params[0].name, "raster");
   EXPECT_EQ(z->params[0].defaultValue, "tiled");
-  EXPECT_EQ(z->params[0].choices, (std::vector<std::string>{"tiled", "halfspace", "scanline"}));
+  EXPECT_EQ(z->params[0].choices, (std::vector<std::string>{"tiled", "halfspace", "scanline", "binned"}));
+  EXPECT_EQ(z->params[1].name, "depth-slices");
+  EXPECT_EQ(z->params[1].defaultValue, "1");
   EXPECT_TRUE(r->params.empty());
   for (const AlgorithmInfo& a : algorithms()) {
     EXPECT_FALSE(a.summary.empty()) << a.name;

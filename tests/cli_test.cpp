@@ -324,7 +324,7 @@ TEST_F(CommandLine, AlgorithmsListsEveryAlgorithmWithGuaranteeAndParameters) {
   ASSERT_GE(list.size(), 2u);
   EXPECT_EQ(list[0]["name"], "zbuffer");
   EXPECT_EQ(list[0]["params"][0]["name"], "raster");
-  EXPECT_EQ(list[0]["params"][0]["values"].size(), 3u);
+  EXPECT_EQ(list[0]["params"][0]["values"].size(), 4u);
   EXPECT_EQ(list[1]["guarantee"], "exact");
 }
 
@@ -367,4 +367,74 @@ TEST_F(CommandLine, StatisticsRecordParamsAndTheOverdrawImageIsWritten) {
   EXPECT_EQ(tiled.status, 2) << tiled;
   EXPECT_NE(tiled.err.find("raster=halfspace"), std::string::npos) << tiled;
   EXPECT_FALSE(fs::exists(file("t.png")));
+}
+
+// --orbit: each timed frame from another pose; per-frame stages apart from the first frame's
+// build (a BSP tree is built once, in the first frame of the process).
+TEST_F(CommandLine, BenchOrbitTimesTheBuildOnceAndTheFramesApart) {
+  Result r = hsr("bench builtin:cubes --algorithm bsp --orbit --frames 4 --warmup 0 --warmup-time 0 --json --size 64x48");
+  ASSERT_EQ(r.status, 0) << r;
+  nlohmann::json bench = nlohmann::json::parse(r.out);
+  EXPECT_EQ(bench["poses"], 4);
+  EXPECT_EQ(bench["frame_ms"].size(), 4u);
+  EXPECT_TRUE(bench["first_frame_stages_ms"].contains("build")) << bench.dump();
+  EXPECT_FALSE(bench["stage_median_ms"].contains("build")) << bench.dump();  // only the first frame built
+  EXPECT_TRUE(bench["stage_median_ms"].contains("traverse")) << bench.dump();
+  EXPECT_TRUE(bench["stage_median_ms"].contains("raster")) << bench.dump();
+  Result text = hsr("bench builtin:cubes --algorithm bsp --orbit --frames 3 --warmup-time 0 --size 64x48");
+  ASSERT_EQ(text.status, 0) << text;
+  EXPECT_NE(text.out.find("an orbit of 3 poses"), std::string::npos) << text;
+  EXPECT_NE(text.out.find("per frame, median ms:"), std::string::npos) << text;
+}
+
+TEST_F(CommandLine, PrecisionPrintsEveryFormatAndTheThesisClaims) {
+  Result r = hsr("precision --near 1 --far 100 --json");
+  ASSERT_EQ(r.status, 0) << r;
+  nlohmann::json p = nlohmann::json::parse(r.out);
+  EXPECT_EQ(p["formats"].size(), 16u);
+  EXPECT_EQ(p["claims"].size(), 2u);
+  for (const auto& f : p["formats"]) EXPECT_GT(f["values"].get<uint64_t>(), 1000u) << f.dump();
+  Result text = hsr("precision --near 0.1 --far 100 --formats u16:z,f32:reversed");
+  ASSERT_EQ(text.status, 0) << text;
+  EXPECT_NE(text.out.find("u16:z"), std::string::npos);
+  EXPECT_EQ(text.out.find("u24:z "), std::string::npos);
+  for (const char* args : {"precision --near 0 --far 1", "precision --near 2 --far 1", "precision --far nan",
+                           "precision --formats u17:z"}) {
+    Result bad = hsr(args);
+    EXPECT_EQ(bad.status, 2) << args << "\n" << bad;
+    EXPECT_TRUE(bad.oneErrorLine()) << args << "\n" << bad;
+  }
+}
+
+TEST_F(CommandLine, CompareOnGivenScenesWritesResultsAndReport) {
+  Result r = hsr("compare builtin:painter-cycle --sizes 48x36 --algorithms raycast,painter,bsp,zbuffer:raster=halfspace "
+                 "--frames 1 --quiet --out study");
+  ASSERT_EQ(r.status, 0) << r;
+  nlohmann::json results = nlohmann::json::parse(readText(file("study/results.json")));
+  ASSERT_EQ(results["cases"].size(), 1u);
+  const auto& runs = results["cases"][0]["runs"];
+  ASSERT_EQ(runs.size(), 4u);
+  EXPECT_EQ(runs[1]["variant"], "painter");
+  EXPECT_GT(runs[1]["wrong_pixels"].get<uint64_t>(), 0u);  // the painter's cycle, on its own camera
+  EXPECT_EQ(runs[1]["check"], "fails, as declared");
+  EXPECT_EQ(runs[2]["wrong_pixels"], 0);
+  EXPECT_EQ(runs[3]["variant"], "zbuffer raster=halfspace");
+  EXPECT_TRUE(results["complete"].get<bool>());
+  EXPECT_TRUE(fs::is_regular_file(file("study/index.html")));
+  EXPECT_TRUE(fs::is_regular_file(file("study/chart.min.js")));
+  EXPECT_TRUE(fs::is_regular_file(file("study/" + runs[1]["images"]["error"].get<std::string>())));
+  EXPECT_NE(r.out.find("Report:"), std::string::npos);
+}
+
+TEST_F(CommandLine, CompareRefusesBadArgumentsBeforeRunning) {
+  writeFile("plain.txt", "x");
+  for (const char* args : {"compare --out s --algorithms nonsense", "compare --out s --algorithms painter:sort-key=up",
+                           "compare --out s --algorithms zbuffer:raster", "compare builtin:cubes --sizes 0x3 --out s",
+                           "compare builtin:nosuch --out s", "compare --out plain.txt --algorithms painter",
+                           "compare --out s --exclude nonsense", "compare --algorithms painter"}) {
+    Result bad = hsr(args);
+    EXPECT_EQ(bad.status, 2) << args << "\n" << bad;
+    EXPECT_TRUE(bad.oneErrorLine()) << args << "\n" << bad;
+  }
+  EXPECT_FALSE(fs::exists(file("s")));
 }

@@ -9,5 +9,9 @@
 #include <hsr/io.hpp>
 #include <hsr/render.hpp>
 #include <hsr/scene.hpp>
+#include <hsr/verify.hpp>
+#include <hsr/orbit.hpp>
 #include <hsr/occlusion.hpp>
+#include <hsr/precision.hpp>
+#include <hsr/views.hpp>
 #include <hsr/svg.hpp>

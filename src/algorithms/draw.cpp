@@ -26,6 +26,15 @@ Rgba8 over(Rgba8 src, Rgba8 dst) {
   return {mix(src.r, dst.r), mix(src.g, dst.g), mix(src.b, dst.b), uint8_t(a + (dst.a * keep + 127) / 255)};
 }
 
+// Per-pixel scratch kept between frames on each calling thread: a frame rewrites warm pages
+// instead of faulting fresh ones in (drawScene is not re-entered on one thread). One per use.
+enum class Scratch { Depth, Winner };
+template <class T, Scratch Use>
+std::vector<T>& scratch() {
+  thread_local std::vector<T> buffer;
+  return buffer;
+}
+
 // One frame's per-pixel state and the rule's work on it, for depth storage S and mapping M
 // (used by DepthTest only; the other rules keep no depth buffer).
 template <WriteRule R, DepthStorage S, DepthMapping M>
@@ -42,16 +51,30 @@ class FragmentWriter {
         clear_(quantizeDepth<S>(opt.depthFormat.clearValue())) {
     const size_t pixels = size_t(cam.width) * size_t(cam.height);
     if constexpr (kDepth) depth_.assign(pixels, clear_);
+    else depth_.clear();
     if constexpr (R == WriteRule::DepthTestBlend) nearest_.assign(pixels, INFINITY);
     if (keepWinner_) winner_.assign(pixels, 0);
+    else winner_.clear();
   }
 
   uint64_t bytes() const {
-    return depth_.size() * sizeof(T) + winner_.size() * sizeof(uint32_t) + nearest_.size() * sizeof(double);
+    return depth_.size() * sizeof(T) + winner_.size() * sizeof(uint32_t) + colors_.size() * sizeof(Rgba8) +
+           nearest_.size() * sizeof(double);
+  }
+
+  // Every triangle's shaded colour, once (on the pool), for resolving: far fewer triangles than
+  // pixels, and a colour is the same all over its triangle.
+  void shadeTriangles(int threads) {
+    if (!color_ || R == WriteRule::Blend || R == WriteRule::DepthTestBlend) return;
+    colors_.resize(tris_.size());
+    constexpr size_t kChunk = 4096;
+    parallelFor(0, (tris_.size() + kChunk - 1) / kChunk, threads, [&](size_t chunk) {
+      for (size_t i = chunk * kChunk; i < std::min(tris_.size(), (chunk + 1) * kChunk); ++i) colors_[i] = colorOf(tris_[i]);
+    });
   }
 
   // Every fragment of triangle i inside pixels [x0, x1] x [y0, y1], through the rule.
-  void draw(uint32_t i, DrawRaster raster, int x0, int y0, int x1, int y1, DrawCounters& n) {
+  void draw(uint32_t i, DrawRaster raster, int x0, int y0, int x1, int y1, DrawCounters& counters) {
     SetupTriangle t = tris_[i];
     t.minX = int16_t(std::max<int>(t.minX, x0));
     t.minY = int16_t(std::max<int>(t.minY, y0));
@@ -59,6 +82,7 @@ class FragmentWriter {
     t.maxY = int16_t(std::min<int>(t.maxY, y1));
     if (t.minX > t.maxX || t.minY > t.maxY) return;
     const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, cam_.near, cam_.far, cam_.orthographic);
+    DrawCounters n;  // counted in registers, added once per triangle
     if (raster == DrawRaster::Scanline) {
       // The eye depth stepped along the span, mapped and stored (the lecture notes' inner loop).
       rasterizeScanline(t, [&](int x, int y, double eyeDepth) {
@@ -70,6 +94,7 @@ class FragmentWriter {
         apply(i, x, y, [&] { return T(fragmentStored<S>(m, x + 0.5, m.p.b * (y + 0.5), m.q.b * (y + 0.5))); }, n);
       });
     }
+    counters.add(n);
   }
 
   // Face ids, exact eye depths and colours of rows [y0, y1) from the last fragment written to
@@ -90,7 +115,7 @@ class FragmentWriter {
           if (triangleIds) frame_.triangleId[idx] = int32_t(derived_ ? derived_->triangle[t.triangle] : t.triangle);
           frame_.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
           // (Blend composited its colours as it drew; the others show the last written.)
-          if (color_ && R != WriteRule::Blend && R != WriteRule::DepthTestBlend) frame_.color[idx] = colorOf(t);
+          if (color_ && R != WriteRule::Blend && R != WriteRule::DepthTestBlend) frame_.color[idx] = colors_[winner_[idx] - 1];
         }
         ++n.covered;
       }
@@ -146,8 +171,10 @@ class FragmentWriter {
   const DerivedScene* derived_;
   const bool keepWinner_, color_;
   const T clear_;
-  std::vector<T> depth_;          // DepthTest: the stored values
-  std::vector<uint32_t> winner_;  // per pixel: 1 + the index of the last fragment's triangle, 0 = none
+  std::vector<T>& depth_ = scratch<T, Scratch::Depth>();  // DepthTest: the stored values
+  // Per pixel: 1 + the index of the last fragment's triangle, 0 = none.
+  std::vector<uint32_t>& winner_ = scratch<uint32_t, Scratch::Winner>();
+  std::vector<Rgba8> colors_;     // per triangle: its colour (shadeTriangles)
   std::vector<double> nearest_;   // DepthTestBlend: the eye depth of the winner's fragment
 };
 
@@ -180,6 +207,7 @@ uint64_t drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const 
       }
       writer.draw(i, raster, 0, 0, cam.width - 1, cam.height - 1, counters);
     }
+    writer.shadeTriangles(1);
     writer.resolveRows(0, cam.height, counters);
     return writer.bytes();
   }
@@ -198,6 +226,7 @@ uint64_t drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const 
       writer.draw(bins[tile][k], DrawRaster::HalfSpace, x0, y0, x1, y1, perTile[tile]);
     }
   });
+  writer.shadeTriangles(threads);
   std::vector<DrawCounters> perRow(size_t(cam.height));
   parallelFor(0, size_t(cam.height), threads, [&](size_t y) { writer.resolveRows(int(y), int(y) + 1, perRow[y]); });
   for (const DrawCounters& c : perTile) counters.add(c);

@@ -2,6 +2,8 @@
 // differs as ambiguous (explained by sub-pixel snapping or depth precision) or wrong. Called by
 // render() when options.verify is set, and by the tests. The classification is documented in
 // docs/reference.md.
+#include <hsr/verify.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <optional>
@@ -158,6 +160,12 @@ bool nearTriangleEdge(const Scene& scene, const dmat4& pixelFromWorld, int32_t t
 
 VerifyResult verifyAgainstReference(const Scene& scene, const Camera& camera, const RenderOptions& options,
                                     const Frame& frame, const Frame& reference) {
+  std::vector<PixelVerdict> verdicts;
+  return verifyPixels(scene, camera, options, frame, reference, verdicts);
+}
+
+VerifyResult verifyPixels(const Scene& scene, const Camera& camera, const RenderOptions& options, const Frame& frame,
+                          const Frame& reference, std::vector<PixelVerdict>& verdicts) {
   const size_t pixels = size_t(camera.width) * size_t(camera.height);
   auto sized = [&](const Frame& f) {
     return f.width == camera.width && f.height == camera.height && f.faceId.size() == pixels &&
@@ -169,6 +177,7 @@ VerifyResult verifyAgainstReference(const Scene& scene, const Camera& camera, co
                      std::to_string(reference.height) + ") must both match the camera's " +
                      std::to_string(camera.width) + "x" + std::to_string(camera.height));
 
+  verdicts.assign(pixels, PixelVerdict::Same);
   std::vector<size_t> differing;
   for (size_t i = 0; i < pixels; ++i)
     if (frame.faceId[i] != reference.faceId[i]) differing.push_back(i);
@@ -192,6 +201,7 @@ VerifyResult verifyAgainstReference(const Scene& scene, const Camera& camera, co
   });
 
   for (size_t k = 0; k < differing.size(); ++k) {
+    verdicts[differing[k]] = wrong[k] ? PixelVerdict::Wrong : PixelVerdict::Ambiguous;
     if (!wrong[k]) {
       ++result.ambiguous_pixels;
       continue;

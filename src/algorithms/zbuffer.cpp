@@ -8,16 +8,81 @@
 //         depth[x, y] = z;  colour[x, y] = its colour
 //
 // That loop is the drawing service's depth-test rule (draw.cpp, FragmentWriter::apply), drawn in
-// submission order: so `raster=halfspace` and `raster=scanline` are this file's few lines. Its
+// submission order: so `raster=halfspace`, `scanline` and `binned` are this file's few lines. Its
 // counters are the textbook's: one z comparison per fragment, one write per fragment that won.
 // `raster=tiled` (the default) is the production z-buffer of zbuffer_tiled.cpp: the same image,
-// bit for bit, computed with far fewer tests on every core.
+// bit for bit, computed with far fewer tests on every core. `depth-slices=N` is the KTH thesis's
+// mitigation of z-fighting: the depth range drawn in parts, each with the buffer's full precision.
 #include "algorithms/algorithms.hpp"
 #include "algorithms/draw.hpp"
 #include "algorithms/sort_keys.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace hsr::algo {
 namespace {
+
+// The statistics of a frame drawn in parts: the counters of every part added up.
+void addPartStats(const Stats& part, Stats& total) {
+  total.triangles_clipped += part.triangles_clipped;
+  total.triangles_degenerate += part.triangles_degenerate;
+  total.culled_backface += part.culled_backface;
+  total.culled_frustum += part.culled_frustum;
+  total.depth_tests += part.depth_tests;
+  total.depth_writes += part.depth_writes;
+  total.color_writes += part.color_writes;
+  total.memory_bytes = std::max(total.memory_bytes, part.memory_bytes);
+  for (const auto& [stage, ms] : part.time_ms) total.addTime(stage, ms);
+}
+
+// A nearer slice's pixels replace the farther slices' under them.
+void mergeNearer(const Frame& part, Frame& frame) {
+  for (size_t i = 0; i < part.depth.size(); ++i) {
+    if (!std::isfinite(part.depth[i])) continue;
+    frame.depth[i] = part.depth[i];
+    if (!part.faceId.empty()) frame.faceId[i] = part.faceId[i];
+    if (!part.triangleId.empty()) frame.triangleId[i] = part.triangleId[i];
+    if (!part.color.empty()) frame.color[i] = part.color[i];
+  }
+  for (size_t i = 0; i < part.writes.size(); ++i) frame.writes[i] += part.writes[i];
+}
+
+// The depth range [near, far] cut into `slices` parts of equal far/near ratio, drawn from the
+// farthest to the nearest, each with the camera's planes set to the part's (so the depth format
+// spends its whole precision on it); the front end clips every triangle to each part. Each part
+// but the farthest reaches a tenth of its depth into the next: a surface where two parts meet lies
+// inside the nearer one, away from its clipping plane, so the rounding of clipped edges leaves no
+// crack there; and where the nearer part shows anything, its nearest surface is the pixel's.
+void zbufferInSlices(const Scene& scene, const Camera& camera, const RenderOptions& options, DrawRaster raster,
+                     int slices, Frame& frame) {
+  const double ratio = std::pow(camera.far / camera.near, 1.0 / slices);
+  const Stats begun = frame.stats;  // what render() recorded: each part starts from it
+  Stats total;
+  Frame part;
+  for (int s = slices - 1; s >= 0; --s) {
+    Camera slice = camera;
+    slice.near = s == 0 ? camera.near : camera.near * std::pow(ratio, s);
+    const double boundary = camera.near * std::pow(ratio, s + 1);
+    slice.far = s == slices - 1 ? camera.far : std::min(camera.far, boundary + 0.1 * (boundary - slice.near));
+    const bool farthest = s == slices - 1;
+    if (s == slices - 2) part = frame;  // the buffers' sizes; drawScene clears them
+    Frame& target = farthest ? frame : part;
+    target.stats = begun;
+    drawScene(scene, slice, options, WriteRule::DepthTest, raster, /*order: submission*/ {}, target);
+    if (farthest) {
+      total = frame.stats;
+      continue;
+    }
+    addPartStats(part.stats, total);
+    mergeNearer(part, frame);
+  }
+  total.covered_pixels = 0;
+  for (float d : frame.depth) total.covered_pixels += std::isfinite(d);
+  total.memory_bytes += frame.depth.size() * (sizeof(float) + 2 * sizeof(int32_t) + sizeof(Rgba8));  // the part frame
+  frame.stats = std::move(total);
+  frame.stats.setDetail("depth_slices", uint64_t(slices));
+}
 
 void zbuffer(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
              Frame& frame) {
@@ -29,19 +94,26 @@ void zbuffer(const Scene& scene, const Camera& camera, const RenderOptions& opti
     std::vector<uint32_t> submission(scene.faceCount());
     for (uint32_t f = 0; f < submission.size(); ++f) submission[f] = f;
     const DrawRaster r = raster == "scanline" ? DrawRaster::Scanline
-                         : raster == "tiled"  ? DrawRaster::Binned
-                                              : DrawRaster::HalfSpace;
+                         : raster == "tiled" || raster == "binned" ? DrawRaster::Binned
+                                                                   : DrawRaster::HalfSpace;
     drawScene(scene, camera, options, WriteRule::DepthTestBlend, r,
               byFaceRank(transparentLast(scene, camera, submission, SortKey::Centroid)), frame);
     return;
   }
   if (raster == "tiled") {
+    if (params.integer("depth-slices") > 1)
+      throw InputError("--param depth-slices: the tiled z-buffer draws the whole range at once; add --param "
+                       "raster=binned (or halfspace, scanline) to draw it in parts");
     if (options.countWrites)
       throw InputError("--overdraw-image: zbuffer's tiled rasterizer does not count writes per pixel (it replaces "
                        "whole blocks at once); add --param raster=halfspace for the textbook z-buffer");
     return zbufferTiled(scene, camera, options, frame);
   }
-  const DrawRaster textbook = raster == "scanline" ? DrawRaster::Scanline : DrawRaster::HalfSpace;
+  const DrawRaster textbook = raster == "scanline" ? DrawRaster::Scanline
+                              : raster == "binned"  ? DrawRaster::Binned
+                                                    : DrawRaster::HalfSpace;
+  if (const int slices = int(params.integer("depth-slices")); slices > 1)
+    return zbufferInSlices(scene, camera, options, textbook, slices, frame);
   drawScene(scene, camera, options, WriteRule::DepthTest, textbook, /*order: submission*/ {}, frame);
 }
 
@@ -52,11 +124,15 @@ AlgorithmInfo zbufferAlgorithm() {
   a.name = "zbuffer";
   a.summary = "z-buffer: a depth test per pixel, triangles in submission order";
   a.source = "KTH report, KTH thesis, lecture notes, Java chapter";
-  a.params = {{"raster", ParamType::Choice, "tiled", {"tiled", "halfspace", "scanline"}, -1e300, 1e300,
+  a.params = {{"raster", ParamType::Choice, "tiled", {"tiled", "halfspace", "scanline", "binned"}, -1e300, 1e300,
                "tiled: the production z-buffer (binned, SIMD, every core; counts only the tests it makes); "
                "halfspace: the textbook z-buffer on the scalar reference rasterizer, every fragment tested in "
                "submission order; scanline: the same on the lecture notes' scanline rasterizer, depth stepped "
-               "along each span"}};
+               "along each span; binned: the textbook z-buffer on the drawing service's binned rasterizer (64x64 "
+               "tiles on every core, scalar), the one the painter's family draws with by default, so times compare"},
+              {"depth-slices", ParamType::Int, "1", {}, 1, 64,
+               "draw the depth range in this many parts of equal far/near ratio, farthest first, each with the "
+               "depth format's whole precision (the KTH thesis's mitigation of z-fighting; not with raster=tiled)"}};
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.guarantee.condition = "up to the depth format's precision: z-fighting is counted as ambiguous";
   a.run = zbuffer;

@@ -26,19 +26,20 @@ void appendText(Bytes& out, const std::string& text) { out.insert(out.end(), tex
 
 }  // namespace
 
-Bytes encodeNpy(const char* descr, int height, int width, const void* elements) {
+Bytes encodeNpy(const char* descr, int height, int width, const void* elements, int channels) {
   // NPY 1.0: magic, version, 16-bit little-endian header length, then a Python dict literal
   // padded with spaces and ended by '\n' so the data starts on a 64-byte boundary.
   constexpr size_t kPreamble = 10, kAlign = 64;
   std::string header = std::string("{'descr': '") + descr + "', 'fortran_order': False, 'shape': (" +
-                       std::to_string(height) + ", " + std::to_string(width) + "), }";
+                       std::to_string(height) + ", " + std::to_string(width) +
+                       (channels > 1 ? ", " + std::to_string(channels) : std::string()) + "), }";
   size_t padded = (kPreamble + header.size() + 1 + kAlign - 1) / kAlign * kAlign - kPreamble;
   header.append(padded - header.size() - 1, ' ');
   header.push_back('\n');
 
   Bytes out{0x93, 'N', 'U', 'M', 'P', 'Y', 1, 0, uint8_t(header.size() & 0xff), uint8_t(header.size() >> 8)};
   appendText(out, header);
-  appendLittleEndian32(out, elements, size_t(width) * size_t(height));
+  appendLittleEndian32(out, elements, size_t(width) * size_t(height) * size_t(channels));
   return out;
 }
 

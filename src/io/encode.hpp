@@ -35,10 +35,11 @@ void requirePixels(const Frame& frame, size_t count, const char* what, const std
 /// Throws std::runtime_error "name: ..." if encoding fails.
 Bytes encodePng(int width, int height, int channels, const uint8_t* pixels, const std::string& name);
 
-/// NPY v1.0 of a C-order (height, width) array whose elements have NumPy type `descr` ("<f4",
-/// "<i4"); `elements` holds height * width 4-byte values in host order, written little-endian.
-/// The header is padded so the data starts at a multiple of 64 bytes.
-Bytes encodeNpy(const char* descr, int height, int width, const void* elements);
+/// NPY v1.0 of a C-order (height, width) array — (height, width, channels) when channels > 1 —
+/// whose elements have NumPy type `descr` ("<f4", "<i4"); `elements` holds height * width *
+/// channels 4-byte values in host order, written little-endian. The header is padded so the
+/// data starts at a multiple of 64 bytes.
+Bytes encodeNpy(const char* descr, int height, int width, const void* elements, int channels = 1);
 /// Grey PFM ("Pf", negative scale = little-endian), rows stored bottom to top as the format wants.
 Bytes encodePfm(int width, int height, const float* rowsTopFirst);
 /// Raw little-endian float32, row 0 = top.

@@ -1,0 +1,98 @@
+// The study's experiments beyond scene x algorithm: z-fighting per depth format, the memory of
+// the buffers, and depth precision curves (study.hpp).
+#include "study.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+
+namespace hsr::cli {
+
+namespace {
+
+// A depth format, and the number of parts the depth range is drawn in (1: at once).
+struct ZfightSetting {
+  const char* format;
+  int slices;
+};
+const ZfightSetting kZfightSettings[] = {{"u16:z", 1}, {"u24:z", 1}, {"u32:z", 1}, {"f32:z", 1}, {"f32:reversed", 1},
+                                         {"u16:inv", 1}, {"u24:linear", 1}, {"u16:z", 4}, {"u16:z", 16}};
+
+}  // namespace
+
+Json zfightExperiment(const StudySettings& settings, bool quick) {
+  const int w = quick ? 160 : 480, h = quick ? 120 : 360;
+  Json rows = Json::array();
+  std::filesystem::create_directories(settings.outDir + "/img/zfight");
+  for (const char* gap : {"1e-2", "1e-3", "1e-4", "1e-5"}) {
+    const std::string name = std::string("builtin:zfight?gap=") + gap;
+    Scene scene = loadScene(name);
+    const CameraSpec spec = scene.camera ? *scene.camera : frameBounds(scene.bounds());
+    const Camera camera = resolveCamera(spec, w, h, scene.bounds(), name);
+    RenderOptions ref;
+    ref.algorithm = "raycast";
+    ref.threads = settings.threads;
+    const Frame reference = render(scene, camera, ref);
+    for (const ZfightSetting& z : kZfightSettings) {
+      if (settings.interrupted && settings.interrupted->load()) return rows;
+      RenderOptions options;
+      options.depthFormat = DepthFormat::parse(z.format);
+      options.threads = settings.threads;
+      if (z.slices > 1) options.params = {{"raster", "binned"}, {"depth-slices", std::to_string(z.slices)}};
+      const auto start = std::chrono::steady_clock::now();
+      const Frame frame = render(scene, camera, options);
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      uint64_t fighting = 0;
+      for (size_t i = 0; i < frame.faceId.size(); ++i) fighting += frame.faceId[i] != reference.faceId[i];
+      const std::string label = z.slices > 1 ? fmt::format("{} in {} parts", z.format, z.slices) : z.format;
+      std::string file = fmt::format("img/zfight/gap{}-{}-{}.png", gap, z.format, z.slices);
+      std::replace(file.begin(), file.end(), ':', '_');
+      writeColorPng(frame, settings.outDir + "/" + file);
+      rows.push_back({{"gap", std::stod(gap)}, {"format", label}, {"depth_slices", z.slices},
+                      {"fighting_pixels", fighting}, {"covered_pixels", frame.stats.covered_pixels}, {"ms", ms},
+                      {"image", file}});
+    }
+  }
+  return rows;
+}
+
+Json memoryTable() {
+  Json rows = Json::array();
+  for (const auto& [w, h] : {std::pair{640, 480}, std::pair{1024, 768}, std::pair{1366, 768}, std::pair{1920, 1080}})
+    for (const char* storage : {"u16", "u24", "u32", "f32"}) {
+      const DepthFormat f = DepthFormat::parse(storage);
+      const uint64_t pixels = uint64_t(w) * uint64_t(h);
+      rows.push_back({{"size", fmt::format("{}x{}", w, h)},
+                      {"pixels", pixels},
+                      {"format", storage},
+                      {"depth_bits", f.bits()},
+                      {"depth_bytes_packed", pixels * uint64_t(f.bits()) / 8},  // as the documents count
+                      {"depth_bytes_hsr", pixels * uint64_t(f.bytesPerPixel())},  // as hsr allocates it
+                      {"color_bytes", pixels * 4},
+                      {"face_id_bytes", pixels * 4}});
+    }
+  return rows;
+}
+
+Json precisionCurves(double near, double far) {
+  Json curves = Json::array();
+  const char* formats[] = {"u16:z", "u24:z", "u32:z", "f32:z", "f32:reversed", "u16:inv", "u24:linear"};
+  for (const char* name : formats) {
+    const DepthPrecision p{DepthFormat::parse(name), near, far};
+    Json steps = Json::array(), fractions = Json::array();
+    constexpr int kPoints = 48;
+    for (int i = 0; i <= kPoints; ++i) {
+      const double d = near * std::pow(far / near, double(i) / kPoints);  // log-spaced eye depths
+      steps.push_back({{"eye_depth", d}, {"relative_step", p.step(d) / d}});
+      const double x = double(i) / kPoints;
+      fractions.push_back({{"range_part", x}, {"value_fraction", p.valueFraction(x)}});
+    }
+    curves.push_back({{"format", name}, {"steps", steps}, {"fractions", fractions}});
+  }
+  return {{"near", near}, {"far", far}, {"curves", curves}};
+}
+
+}  // namespace hsr::cli
