@@ -308,7 +308,7 @@ using Runner = std::function<int()>;
 
 struct RenderFlags {
   ViewFlags view;
-  std::string out, ids, depth, depthImage, overdrawImage, stats;
+  std::string out, ids, depth, depthImage, overdrawImage, stats, svg;
   std::string instanceIds, barycentric;  // attributes resolved from the ids (hsr/views.hpp)
   bool verify = false, quiet = false, json = false;
 };
@@ -388,7 +388,12 @@ int runRender(const RenderFlags& f) {
     throw InputError("--verify compares face and triangle ids: --outputs " + f.view.outputs + " lacks face or triangle");
   checkAttributeOutputs(f, kept);
 
+  if (!f.svg.empty()) hsr::checkSvgPath(f.svg);
+
   Job job = f.view.prepare();
+  if (!f.svg.empty() && !hsr::paintsPolygons(job.options.algorithm))
+    throw InputError("--svg: " + job.options.algorithm +
+                     " paints no polygons (vector output needs --algorithm painter, newell or bsp)");
   job.options.verify = f.verify;
   job.options.countWrites = !f.overdrawImage.empty();
   auto start = std::chrono::steady_clock::now();
@@ -396,6 +401,12 @@ int runRender(const RenderFlags& f) {
   double wallMs = millisecondsSince(start);
 
   std::vector<std::string> written;
+  if (!f.svg.empty()) {  // the same order again, as polygons (timed apart from the frame)
+    const auto svgStart = std::chrono::steady_clock::now();
+    hsr::writeSvg(job.scene, job.camera, job.options, f.svg);
+    frame.stats.addTime("svg", millisecondsSince(svgStart));
+    written.push_back(f.svg);
+  }
   for (const Output& o : outputs) {
     if (o.path.empty()) continue;
     o.write(frame, o.path);
@@ -445,6 +456,11 @@ Runner setupRender(CLI::App& cmd) {
       ->type_name("BARY.npy")
       ->group(outputs);
   cmd.add_option("--stats", f->stats, "Statistics JSON")->type_name("STATS.json")->group(outputs);
+  cmd.add_option("--svg", f->svg,
+                 "Vector image: the painting order of painter, newell or bsp as SVG polygons, back to front "
+                 "(docs/vector-output.md)")
+      ->type_name("IMAGE.svg")
+      ->group(outputs);
   cmd.add_flag("--verify", f->verify, "Also render the exact reference and count wrong/ambiguous pixels");
   cmd.add_flag("--json", f->json, "Print the statistics JSON to stdout instead of the summary");
   cmd.add_flag("-q,--quiet", f->quiet, "Print nothing on success");

@@ -20,7 +20,7 @@ namespace {
 
 const std::vector<std::string> kSceneNames = {"cubes",         "random",         "sphere",           "layers",
                                               "city",          "clutter",        "painter-midpoint", "painter-cycle",
-                                              "interpenetrate", "zfight"};
+                                              "interpenetrate", "glass", "zfight"};
 
 // Each default scene is generated once per test run (the sphere has a million triangles).
 const Scene& defaultScene(const std::string& name) {
@@ -189,6 +189,7 @@ TEST(Builtin, DefaultCountsMatchTheDocs) {
       {"painter-midpoint", {2, 4, 2, 8}},
       {"painter-cycle", {3, 6, 3, 12}},
       {"interpenetrate", {2, 4, 2, 8}},
+      {"glass", {6, 12, 6, 24}},
       {"zfight", {2, 4, 2, 8}},
   };
   for (const auto& name : kSceneNames) {
@@ -287,7 +288,7 @@ TEST(Builtin, ParsesParameters) {
 TEST(Builtin, BadSpecsThrowClearErrors) {
   EXPECT_EQ(errorOf("teapot"),
             "builtin:teapot: unknown built-in scene (known: cubes, random, sphere, layers, city, clutter, "
-            "painter-midpoint, painter-cycle, interpenetrate, zfight)");
+            "painter-midpoint, painter-cycle, interpenetrate, glass, zfight)");
   EXPECT_EQ(errorOf("random?x=1"), "builtin:random: unknown parameter 'x' (known: n, seed, size)");
   EXPECT_EQ(errorOf("cubes?seed=1"),
             "builtin:cubes: unknown parameter 'seed' (known: this scene has none)");

@@ -41,6 +41,7 @@ Pose ownPose(const Scene& scene) { return {scene.camera ? *scene.camera : frameB
 Scene load(const std::string& name) {
   if (name == "test:boxes") return test::boxesScene();
   if (name == "test:soup") return test::randomSoup(200, 42);
+  if (name == "test:polygons") return test::randomPolygons(60, 11);
   return loadScene(name);
 }
 
@@ -142,6 +143,7 @@ Plan fullPlan() {
   p.cases = {
       {"test:boxes", 40},
       {"test:soup", 40},
+      {"test:polygons", 20},
       {"builtin:cubes", 40},
       {"builtin:random?n=400&seed=3", 30},
       {"builtin:painter-midpoint", 25},

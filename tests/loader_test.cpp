@@ -475,6 +475,40 @@ TEST_F(LoaderGltf, NodeTransformsAreFlattened) {
   EXPECT_EQ(s.faceColors[0], (Rgba8{255, 0, 0, 255}));
 }
 
+// glTF opacity: baseColorFactor's alpha with alphaMode BLEND; OPAQUE (also the default) ignores
+// it; MASK is opaque from alphaCutoff up.
+TEST_F(LoaderGltf, AlphaModeDecidesTheOpacity) {
+  Bytes buffer;
+  for (float f : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) buffer.put(f);
+  for (uint16_t i : {0, 1, 2}) buffer.put(i);
+  std::string gltf = R"({
+    "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0, 1, 2, 3]}],
+    "nodes": [{"mesh": 0}, {"mesh": 1}, {"mesh": 2}, {"mesh": 3}],
+    "meshes": [
+      {"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]},
+      {"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 1}]},
+      {"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 2}]},
+      {"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 3}]}],
+    "materials": [
+      {"pbrMetallicRoughness": {"baseColorFactor": [1, 0, 0, 0.5]}, "alphaMode": "BLEND"},
+      {"pbrMetallicRoughness": {"baseColorFactor": [0, 1, 0, 0.5]}},
+      {"pbrMetallicRoughness": {"baseColorFactor": [0, 0, 1, 0.4]}, "alphaMode": "MASK", "alphaCutoff": 0.3},
+      {"pbrMetallicRoughness": {"baseColorFactor": [0, 0, 1, 0.2]}, "alphaMode": "MASK"}],
+    "buffers": [{"byteLength": 42, "uri": "data:application/octet-stream;base64,)" +
+                     base64(buffer.s) + R"("}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+    "accessors": [
+      {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+      {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]
+  })";
+  Scene s = loadScene(write("alpha.gltf", gltf));
+  ASSERT_EQ(s.faceCount(), 4u);
+  EXPECT_EQ(s.faceColors[0].a, 128);
+  EXPECT_EQ(s.faceColors[1].a, 255);
+  EXPECT_EQ(s.faceColors[2].a, 255);
+  EXPECT_EQ(s.faceColors[3].a, 0);
+}
+
 TEST_F(LoaderGltf, AssimpErrorsNameTheFile) {
   expectError("broken.gltf", "{ \"asset\": ", {"broken.gltf: assimp:"});
   expectError("unknown.xyz123", "what is this", {"unknown.xyz123: assimp:"});

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <string>
 #include <random>
+#include <vector>
 
 namespace hsr {
 /// The z-buffer's rasterizers (its `raster` parameter), for tests that compare them.
@@ -102,6 +103,35 @@ inline Scene rotatedBoxes(int n, uint64_t seed) {
                             axes[2] * (k & 4 ? half.z : -half.z));
     const uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
     for (auto& f : quads) s.addFace({b + f[0], b + f[1], b + f[2], b + f[3]}, color);
+  }
+  s.finalize();
+  return s;
+}
+
+/// `n` random planar convex polygons, quads and pentagons alternately, in a cube of side 2 around
+/// the origin, of random orientation and radius 0.25 to 0.6: they interpenetrate and overlap in
+/// cycles (the cases a depth sort must split).
+inline Scene randomPolygons(int n, uint64_t seed) {
+  Scene s;
+  s.source = "test:polygons";
+  s.beginMesh("polygons");
+  std::mt19937_64 rng(seed);
+  auto u = [&] { return double(rng() >> 11) * 0x1.0p-53; };
+  for (int i = 0; i < n; ++i) {
+    const dvec3 c{u() * 2 - 1, u() * 2 - 1, u() * 2 - 1};
+    dvec3 a{u() - 0.5, u() - 0.5, u() - 0.5}, b{u() - 0.5, u() - 0.5, u() - 0.5};
+    a = glm::normalize(a);
+    b = glm::normalize(b - glm::dot(a, b) * a);
+    const int k = 4 + i % 2;
+    const double radius = 0.25 + 0.35 * u(), turn = u() * 2 * M_PI;
+    const uint32_t first = uint32_t(s.positions.size());
+    std::vector<uint32_t> corners;
+    for (int j = 0; j < k; ++j) {
+      const double angle = turn + 2 * M_PI * (j + 0.3 * u()) / k;
+      s.positions.push_back(c + radius * (std::cos(angle) * a + std::sin(angle) * b));
+      corners.push_back(first + uint32_t(j));
+    }
+    s.addFace(corners, Rgba8{uint8_t(rng()), uint8_t(rng()), uint8_t(rng()), 255});
   }
   s.finalize();
   return s;

@@ -14,3 +14,4 @@
 #include <hsr/occlusion.hpp>
 #include <hsr/precision.hpp>
 #include <hsr/views.hpp>
+#include <hsr/svg.hpp>

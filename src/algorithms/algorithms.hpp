@@ -9,6 +9,7 @@
 #include <hsr/render.hpp>
 
 #include "algorithms/draw.hpp"
+#include "algorithms/polygon_split.hpp"
 
 namespace hsr::algo {
 
@@ -20,12 +21,49 @@ AlgorithmInfo reversePainterAlgorithm();  // reverse_painter.cpp
 AlgorithmInfo sortedZbufferAlgorithm();   // sorted_zbuffer.cpp
 AlgorithmInfo hzbAlgorithm();             // hzb.cpp: Greene's hierarchical z-buffer
 AlgorithmInfo midpointAlgorithm();        // midpoint.cpp: the Ukrainian paper's midpoint subdivision
+AlgorithmInfo newellAlgorithm();          // newell.cpp: Newell-Newell-Sancha depth sort
+AlgorithmInfo abufferAlgorithm();         // abuffer.cpp: the exact colour reference for transparency
+
+/// Whether any face of the scene has an opacity below 1 (alpha < 255) (abuffer.cpp): then the
+/// list-priority algorithms blend in their order and the z-buffer family adds a transparent pass.
+bool hasTransparency(const Scene& scene);
+
+/// The colour error of `frame` against the A-buffer's `reference` (verify.cpp), over the pixels
+/// whose face id is the reference's (the others are the id check's: wrong or ambiguous) and,
+/// with `nearEdge`, that are not marked in it: per
+/// channel the largest and the mean absolute difference, and the pixels where some channel
+/// differs by more than one 8-bit step.
+struct ColorError {
+  uint64_t pixels = 0;    // compared
+  uint64_t nearEdge = 0;  // not compared: a fragment's edge within 1/128 pixel of the centre (abufferFrame)
+  int max[3] = {0, 0, 0};
+  double mean[3] = {0, 0, 0};
+  uint64_t beyondStep = 0;
+};
+ColorError colorError(const Frame& frame, const Frame& reference, const std::vector<uint8_t>* nearEdge = nullptr);
+/// The A-buffer's frame (abuffer.cpp); with `nearEdge`, per pixel 1 where the centre is within
+/// 1/128 pixel of a projected edge of one of its fragments' triangles (a rasterizer's snapped
+/// coverage may differ there, as for --verify's ambiguous pixels).
+void abufferFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame,
+                  std::vector<uint8_t>* nearEdge);
 
 /// The scene's BSP tree (built once per scene and options, bsp.cpp) drawn in its order from the
 /// camera, back to front or front to back, under `rule`; fills the statistics and the tree's
 /// details (nodes, fragments, splits, depth, built, build_ms).
 void drawInBspOrder(const Scene& scene, const Camera& camera, const RenderOptions& options,
                     const BspBuildOptions& build, WriteRule rule, DrawRaster raster, bool frontToBack, Frame& frame);
+
+/// A painting order as polygons, back to front: what painter, newell and bsp draw from a camera,
+/// and what the vector output (io/svg.cpp) writes.
+struct PaintedPolygons {
+  std::vector<dvec3> vertices;       // world space
+  std::vector<PolygonRef> polygons;  // back to front, each a part of (or all of) a scene face
+  std::vector<uint32_t> triangles;   // per polygon: a scene triangle of its face (its shading)
+};
+/// The painting order of the algorithm with these parameters (painter.cpp, newell.cpp, bsp.cpp).
+void painterPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out);
+void newellPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out);
+void bspPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out);
 
 /// What a list-priority algorithm ordering faces by one sort key fails on (painter.cpp): the
 /// painter's with that key, and the reverse painter's with that order (the same image).

@@ -28,11 +28,6 @@ using algo::PolygonSide;
 using algo::splitPolygon;
 using algo::SplitPlane;
 
-// "On the plane" means within kRelEpsilon of the scene's size (the larger of its bounding box's
-// diagonal and its largest coordinate): far above double rounding of a plane distance, far below
-// any feature a scene draws.
-constexpr double kRelEpsilon = 1e-9;
-
 // A polygon while the tree is built: vertices in the builder's pool, its face's plane.
 struct WorkPolygon {
   uint32_t first = 0, count = 0;
@@ -90,33 +85,10 @@ void Builder::addPolygon(std::span<const dvec3> vertices, const SplitPlane& plan
 // Every face with area as one polygon (convex and planar) or as its triangles (otherwise), in
 // face order, with planes computed in double from the polygon's own vertices.
 void Builder::addInputPolygons() {
-  const Bounds3 b = scene_.bounds();
-  const double size = b.empty() ? 1.0
-                               : std::max(glm::length(b.hi - b.lo),
-                                          std::max(glm::length(glm::abs(b.lo)), glm::length(glm::abs(b.hi))));
-  epsilon_ = kRelEpsilon * (std::isfinite(size) && size > 0 ? size : 1.0);
-  std::vector<uint32_t> firstTriangle(scene_.faceCount() + 1, 0), triangleCount(scene_.faceCount(), 0);
-  for (size_t t = scene_.triangles.size(); t-- > 0;) {
-    firstTriangle[scene_.triangles[t].face] = uint32_t(t);
-    ++triangleCount[scene_.triangles[t].face];
-  }
-  std::vector<dvec3> vertices;
-  for (uint32_t f = 0; f < scene_.faceCount(); ++f) {
-    if (triangleCount[f] == 0) continue;  // no area: finalize() drew nothing of it
-    vertices.clear();
-    for (uint32_t v : scene_.face(f)) vertices.push_back(scene_.positions[v]);
-    SplitPlane plane;
-    if (planeOfPolygon(vertices, plane) && triangleCount[f] + 2 == vertices.size() &&
-        isPlanarConvex(vertices, plane, epsilon_)) {
-      addPolygon(vertices, plane, f, firstTriangle[f]);
-      continue;
-    }
-    for (uint32_t t = firstTriangle[f], e = t + triangleCount[f]; t < e; ++t) {
-      const Triangle& tri = scene_.triangles[t];
-      const dvec3 corners[3] = {scene_.positions[tri.v[0]], scene_.positions[tri.v[1]], scene_.positions[tri.v[2]]};
-      if (planeOfPolygon(corners, plane)) addPolygon(corners, plane, f, t);
-    }
-  }
+  epsilon_ = algo::sceneEpsilon(scene_);
+  algo::forEachConvexPolygon(scene_, epsilon_,
+                             [&](std::span<const dvec3> vertices, const SplitPlane& plane, uint32_t face,
+                                 uint32_t triangle) { addPolygon(vertices, plane, face, triangle); });
   inputs_ = polygons_.size();
   if (inputs_ > options_.maxFragments)
     throw InputError("bsp: " + scene_.source + " has " + std::to_string(inputs_) +
@@ -214,59 +186,15 @@ void Builder::partition(Job& job, std::vector<Job>& stack) {
   }
 }
 
-bool lexLess(const dvec3& a, const dvec3& b) {
-  return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
-}
-
-// Fragments of one face meet along its cuts, and a later cut of one side puts a vertex on the
-// shared edge that the other side lacks (a T-junction): snapped to the pixel grid, the two would
-// leave pixel-wide cracks at a few centres. So every fragment edge gets, in order, the vertices of
-// its face's other fragments that lie on it (within epsilon); then the shared edges are the same
-// vertices on both sides, and the rasterizers' fill rule covers each centre once.
+// Fragments of one face meet along its cuts (algo::closeTJunctions).
 void Builder::closeTJunctions() {
-  std::vector<uint32_t> byFace(placed_);
-  std::stable_sort(byFace.begin(), byFace.end(),
-                   [&](uint32_t a, uint32_t b) { return polygons_[a].face < polygons_[b].face; });
-  std::vector<dvec3> points, out;
-  std::vector<std::pair<double, dvec3>> onEdge;
-  for (size_t i = 0; i < byFace.size();) {
-    size_t e = i;
-    while (e < byFace.size() && polygons_[byFace[e]].face == polygons_[byFace[i]].face) ++e;
-    if (e - i >= 2) {
-      points.clear();
-      for (size_t k = i; k < e; ++k) {
-        const auto v = verticesOf(polygons_[byFace[k]]);
-        points.insert(points.end(), v.begin(), v.end());
-      }
-      std::sort(points.begin(), points.end(), lexLess);
-      points.erase(std::unique(points.begin(), points.end()), points.end());
-      for (size_t k = i; k < e; ++k) {
-        WorkPolygon& p = polygons_[byFace[k]];
-        out.clear();
-        for (uint32_t j = 0; j < p.count; ++j) {
-          const dvec3 u = pool_[p.first + j], v = pool_[p.first + (j + 1) % p.count];
-          out.push_back(u);
-          const dvec3 lo = glm::min(u, v) - epsilon_, hi = glm::max(u, v) + epsilon_, edge = v - u;
-          const double length2 = glm::dot(edge, edge);
-          if (!(length2 > 0)) continue;
-          onEdge.clear();
-          auto it = std::lower_bound(points.begin(), points.end(), dvec3(lo.x, -INFINITY, -INFINITY), lexLess);
-          for (; it != points.end() && it->x <= hi.x; ++it) {
-            const dvec3& x = *it;
-            if (x == u || x == v || x.y < lo.y || x.y > hi.y || x.z < lo.z || x.z > hi.z) continue;
-            const double t = glm::dot(x - u, edge) / length2;
-            if (t > 0 && t < 1 && glm::length(u + t * edge - x) <= epsilon_) onEdge.emplace_back(t, x);
-          }
-          std::sort(onEdge.begin(), onEdge.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-          for (const auto& [t, x] : onEdge) out.push_back(x);
-        }
-        if (out.size() == p.count) continue;
-        p.first = uint32_t(pool_.size());
-        p.count = uint32_t(out.size());
-        pool_.insert(pool_.end(), out.begin(), out.end());
-      }
-    }
-    i = e;
+  std::vector<algo::PolygonRef> refs;
+  refs.reserve(placed_.size());
+  for (uint32_t id : placed_) refs.push_back({polygons_[id].first, polygons_[id].count, polygons_[id].face});
+  algo::closeTJunctions(pool_, refs, epsilon_);
+  for (size_t i = 0; i < placed_.size(); ++i) {
+    polygons_[placed_[i]].first = refs[i].first;
+    polygons_[placed_[i]].count = refs[i].count;
   }
 }
 
@@ -442,7 +370,8 @@ void bsp(const Scene& scene, const Camera& camera, const RenderOptions& options,
   BspBuildOptions build;
   build.heuristic = params.text("heuristic") == "first" ? BspHeuristic::First : BspHeuristic::Scored;
   build.maxFragments = uint64_t(params.integer("max-fragments"));
-  drawInBspOrder(scene, camera, options, build, WriteRule::Overwrite, drawRasterOf(params), false, frame);
+  drawInBspOrder(scene, camera, options, build, hasTransparency(scene) ? WriteRule::Blend : WriteRule::Overwrite,
+                 drawRasterOf(params), false, frame);
   frame.stats.setDetail("heuristic", params.text("heuristic"));
 }
 
@@ -486,6 +415,25 @@ void drawInBspOrder(const Scene& scene, const Camera& camera, const RenderOption
   st.memory_bytes += tree.nodes().size() * sizeof(BspTree::Node) +
                      tree.fragments().size() * sizeof(BspTree::Fragment) + tree.vertices().size() * sizeof(dvec3) +
                      rank.size() * 2 * sizeof(uint32_t);
+}
+
+void bspPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out) {
+  BspBuildOptions build;
+  build.heuristic = params.text("heuristic") == "first" ? BspHeuristic::First : BspHeuristic::Scored;
+  build.maxFragments = uint64_t(params.integer("max-fragments"));
+  bool built = false;
+  const std::shared_ptr<const BuiltBsp> bsp = cachedBsp(scene, build, built);
+  const BspTree& tree = bsp->tree;
+  std::vector<uint32_t> order;
+  tree.backToFront(homogeneousEye(camera), order);
+  out.vertices.assign(tree.vertices().begin(), tree.vertices().end());
+  out.polygons.clear();
+  out.triangles.clear();
+  for (uint32_t i : order) {
+    const BspTree::Fragment& f = tree.fragments()[i];
+    out.polygons.push_back({f.firstVertex, f.vertexCount, f.face});
+    out.triangles.push_back(f.triangle);
+  }
 }
 
 AlgorithmInfo bspAlgorithm() {

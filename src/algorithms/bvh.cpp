@@ -339,6 +339,39 @@ RayHit CameraSpaceBvh::tracePixel(double px, double py, Cull cull, TraceCounters
   return closestHit(WatertightRay(origin, dir), camera_.near, camera_.far, cull, counters);
 }
 
+void CameraSpaceBvh::allPixelHits(double px, double py, Cull cull, std::vector<RayHit>& hits,
+                                  TraceCounters& counters) const {
+  if (nodes_.empty()) return;
+  dvec3 origin, dir;
+  camera_.cameraRay(px, py, origin, dir);
+  const WatertightRay ray(origin, dir);
+  const dvec3 invDir = 1.0 / ray.dir();
+  const double tMin = camera_.near, tMax = camera_.far;
+  uint32_t stack[kStackSize];
+  int size = 0;
+  double t0, t1;
+  if (!boxEntry(nodes_[0], origin, invDir, tMin, tMax, t0)) return;
+  stack[size++] = 0;
+  while (size > 0) {
+    const Node& node = nodes_[stack[--size]];
+    if (node.count > 0) {
+      for (uint32_t i = node.first; i < node.first + node.count; ++i) {
+        const uint32_t tri = order_[i];
+        const Triangle& tr = scene_.triangles[tri];
+        const double t = ray.intersect(vertices_[tr.v[0]], vertices_[tr.v[1]], vertices_[tr.v[2]], cull);
+        ++counters.tests;
+        if (t >= tMin && t <= tMax) {
+          hits.push_back({t, int32_t(tri)});
+          ++counters.hits;
+        }
+      }
+      continue;
+    }
+    if (boxEntry(nodes_[node.first], origin, invDir, tMin, tMax, t0)) stack[size++] = node.first;
+    if (boxEntry(nodes_[node.first + 1], origin, invDir, tMin, tMax, t1)) stack[size++] = node.first + 1;
+  }
+}
+
 uint64_t CameraSpaceBvh::memoryBytes() const {
   return vertices_.capacity() * sizeof(dvec3) + nodes_.capacity() * sizeof(Node) +
          order_.capacity() * sizeof(uint32_t);

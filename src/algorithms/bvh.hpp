@@ -63,6 +63,10 @@ class CameraSpaceBvh {
   /// The camera ray through pixel position (px, py), traced within [near, far].
   RayHit tracePixel(double px, double py, Cull cull, TraceCounters& counters) const;
 
+  /// Every hit of the camera ray through pixel position (px, py) within [near, far] among
+  /// triangles not culled, appended to `hits` in no particular order (the A-buffer's fragments).
+  void allPixelHits(double px, double py, Cull cull, std::vector<RayHit>& hits, TraceCounters& counters) const;
+
   /// Triangles with zero world-space area (or sent to infinity by the camera transform): left
   /// out of the hierarchy, never hit.
   uint64_t degenerateTriangles() const { return degenerate_; }

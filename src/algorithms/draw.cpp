@@ -3,6 +3,7 @@
 #include "algorithms/draw.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "algorithms/algorithms.hpp"
 #include "core/depth_map.hpp"
@@ -40,6 +41,7 @@ template <WriteRule R, DepthStorage S, DepthMapping M>
 class FragmentWriter {
  public:
   using T = DepthT<S>;
+  static constexpr bool kDepth = R == WriteRule::DepthTest || R == WriteRule::DepthTestBlend;
 
   FragmentWriter(std::span<const SetupTriangle> tris, const Camera& cam, const RenderOptions& opt,
                  const TriangleShader& shade, Frame& frame, const DerivedScene* derived)
@@ -48,20 +50,22 @@ class FragmentWriter {
         color_(has(opt.outputs, FrameOutputs::Color)),
         clear_(quantizeDepth<S>(opt.depthFormat.clearValue())) {
     const size_t pixels = size_t(cam.width) * size_t(cam.height);
-    if constexpr (R == WriteRule::DepthTest) depth_.assign(pixels, clear_);
+    if constexpr (kDepth) depth_.assign(pixels, clear_);
     else depth_.clear();
+    if constexpr (R == WriteRule::DepthTestBlend) nearest_.assign(pixels, INFINITY);
     if (keepWinner_) winner_.assign(pixels, 0);
     else winner_.clear();
   }
 
   uint64_t bytes() const {
-    return depth_.size() * sizeof(T) + winner_.size() * sizeof(uint32_t) + colors_.size() * sizeof(Rgba8);
+    return depth_.size() * sizeof(T) + winner_.size() * sizeof(uint32_t) + colors_.size() * sizeof(Rgba8) +
+           nearest_.size() * sizeof(double);
   }
 
   // Every triangle's shaded colour, once (on the pool), for resolving: far fewer triangles than
   // pixels, and a colour is the same all over its triangle.
   void shadeTriangles(int threads) {
-    if (!color_ || R == WriteRule::Blend) return;
+    if (!color_ || R == WriteRule::Blend || R == WriteRule::DepthTestBlend) return;
     colors_.resize(tris_.size());
     constexpr size_t kChunk = 4096;
     parallelFor(0, (tris_.size() + kChunk - 1) / kChunk, threads, [&](size_t chunk) {
@@ -111,7 +115,7 @@ class FragmentWriter {
           if (triangleIds) frame_.triangleId[idx] = int32_t(derived_ ? derived_->triangle[t.triangle] : t.triangle);
           frame_.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
           // (Blend composited its colours as it drew; the others show the last written.)
-          if (color_ && R != WriteRule::Blend) frame_.color[idx] = colors_[winner_[idx] - 1];
+          if (color_ && R != WriteRule::Blend && R != WriteRule::DepthTestBlend) frame_.color[idx] = colors_[winner_[idx] - 1];
         }
         ++n.covered;
       }
@@ -123,21 +127,33 @@ class FragmentWriter {
   template <class Stored>
   void apply(uint32_t i, int x, int y, Stored&& stored, DrawCounters& n) {
     const size_t idx = frame_.index(x, y);
-    if constexpr (R == WriteRule::DepthTest) {
+    if constexpr (kDepth) {
       constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
       const T z = stored();
       ++n.depthTests;
       if (!(greater ? z > depth_[idx] : z < depth_[idx])) return;  // strictly nearer: ties keep the first
-      depth_[idx] = z;
-      ++n.depthWrites;
+      if (R == WriteRule::DepthTest || colorOf(tris_[i]).a == 255) {
+        depth_[idx] = z;
+        ++n.depthWrites;
+      }
     } else if constexpr (R == WriteRule::WhereUnwritten) {
       if (winner_[idx]) return;
     }
-    if (keepWinner_) winner_[idx] = i + 1;
+    if constexpr (R == WriteRule::DepthTestBlend) {
+      // The ids show the nearest fragment drawn, transparent or not (transparent ones write no depth).
+      const double d = tris_[i].eyeDepth(x + 0.5, y + 0.5);
+      if (d < nearest_[idx]) {
+        nearest_[idx] = d;
+        winner_[idx] = i + 1;
+      }
+    } else if (keepWinner_) {
+      winner_[idx] = i + 1;
+    }
     ++n.written;
     if (color_) {
       ++n.colorWrites;
-      if constexpr (R == WriteRule::Blend) frame_.color[idx] = over(colorOf(tris_[i]), frame_.color[idx]);
+      if constexpr (R == WriteRule::Blend || R == WriteRule::DepthTestBlend)
+        frame_.color[idx] = over(colorOf(tris_[i]), frame_.color[idx]);
     }
     if (!frame_.writes.empty()) ++frame_.writes[idx];
   }
@@ -159,6 +175,7 @@ class FragmentWriter {
   // Per pixel: 1 + the index of the last fragment's triangle, 0 = none.
   std::vector<uint32_t>& winner_ = scratch<uint32_t, Scratch::Winner>();
   std::vector<Rgba8> colors_;     // per triangle: its colour (shadeTriangles)
+  std::vector<double> nearest_;   // DepthTestBlend: the eye depth of the winner's fragment
 };
 
 // Per tile of kBinTile pixels, the triangles whose box meets it, in drawing order.
@@ -227,6 +244,7 @@ const char* writeRuleName(WriteRule rule) {
     case WriteRule::Overwrite: return "overwrite";
     case WriteRule::WhereUnwritten: return "where-unwritten";
     case WriteRule::Blend: return "blend";
+    case WriteRule::DepthTestBlend: return "depth-test-blend";
   }
   return "?";
 }
@@ -257,7 +275,7 @@ uint64_t drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, D
   frame.clear(options.background, resolveThreads(options.threads));
   auto withRule = [&]<WriteRule R>() {
     uint64_t bytes = 0;
-    if constexpr (R == WriteRule::DepthTest)
+    if constexpr (R == WriteRule::DepthTest || R == WriteRule::DepthTestBlend)
       visitDepthFormat(options.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
         bytes = drawWith<R, S, M>(triangles, raster, camera, options, shade, frame, counters, derived);
       });
@@ -271,6 +289,7 @@ uint64_t drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, D
     case WriteRule::Overwrite: return withRule.template operator()<WriteRule::Overwrite>();
     case WriteRule::WhereUnwritten: return withRule.template operator()<WriteRule::WhereUnwritten>();
     case WriteRule::Blend: return withRule.template operator()<WriteRule::Blend>();
+    case WriteRule::DepthTestBlend: return withRule.template operator()<WriteRule::DepthTestBlend>();
   }
   return 0;
 }
@@ -292,7 +311,7 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
   const uint64_t bufferBytes = drawOrdered(triangles, rule, raster, camera, options, shade, frame, n, derived);
   st.addTime("raster", timer.lap());
 
-  if (rule == WriteRule::DepthTest) st.depth_format = options.depthFormat.name();
+  if (rule == WriteRule::DepthTest || rule == WriteRule::DepthTestBlend) st.depth_format = options.depthFormat.name();
   st.triangles_clipped = fe.clipped;
   st.triangles_degenerate = fe.degenerate;
   st.culled_backface = fe.culledBackface;

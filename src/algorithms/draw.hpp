@@ -22,6 +22,8 @@ enum class WriteRule : uint8_t {
   Overwrite,       // the painter's: every fragment overwrites; no depth buffer
   WhereUnwritten,  // the reverse painter's: written only where nothing was written yet; stops when all is
   Blend,           // transparency: the colour composited over by the triangle's alpha; ids and depth overwritten
+  DepthTestBlend,  // the z-buffer's transparent pass: depth-tested; an opaque triangle (alpha 255) writes depth
+                   // and colour, a transparent one writes no depth and composites its colour over
 };
 const char* writeRuleName(WriteRule rule);
 

@@ -4,6 +4,8 @@
 // when a polygon's key is behind another's although part of it is in front (the midpoint
 // failure), when polygons overlap in a cycle, and when they interpenetrate. Those failures are
 // declared, per sort key, and checked by the conformance suite like any guarantee.
+#include <algorithm>
+
 #include "algorithms/algorithms.hpp"
 #include "algorithms/draw.hpp"
 #include "algorithms/sort_keys.hpp"
@@ -14,12 +16,39 @@ namespace {
 void painter(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
              Frame& frame) {
   const SortKey key = sortKeyOf(params.text("sort-key"));
-  drawScene(scene, camera, options, WriteRule::Overwrite, drawRasterOf(params),
+  drawScene(scene, camera, options, hasTransparency(scene) ? WriteRule::Blend : WriteRule::Overwrite,
+            drawRasterOf(params),
             byFaceRank(faceRanks(faceKeys(scene, camera, key), /*backToFront=*/true)), frame);
   frame.stats.setDetail("sort_key", params.text("sort-key"));
 }
 
 }  // namespace
+
+// Each face as its polygon (its triangles when it is not convex and planar), faces by rank.
+void painterPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out) {
+  const std::vector<uint32_t> rank =
+      faceRanks(faceKeys(scene, camera, sortKeyOf(params.text("sort-key"))), /*backToFront=*/true);
+  struct Entry {
+    uint32_t rank;
+    PolygonRef polygon;
+    uint32_t triangle;
+  };
+  std::vector<Entry> entries;
+  out.vertices.clear();
+  forEachConvexPolygon(scene, sceneEpsilon(scene),
+                       [&](std::span<const dvec3> vertices, const SplitPlane&, uint32_t face, uint32_t triangle) {
+                         entries.push_back({rank[face], {uint32_t(out.vertices.size()), uint32_t(vertices.size()), face},
+                                            triangle});
+                         out.vertices.insert(out.vertices.end(), vertices.begin(), vertices.end());
+                       });
+  std::stable_sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.rank < b.rank; });
+  out.polygons.clear();
+  out.triangles.clear();
+  for (const Entry& e : entries) {
+    out.polygons.push_back(e.polygon);
+    out.triangles.push_back(e.triangle);
+  }
+}
 
 Guarantee listPriorityFailures(const std::string& key) {
   Guarantee g;

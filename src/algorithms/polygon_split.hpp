@@ -5,8 +5,13 @@
 #include <hsr/common.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
+
+namespace hsr {
+struct Scene;
+}
 
 namespace hsr::algo {
 
@@ -41,5 +46,29 @@ void splitPolygon(std::span<const dvec3> polygon, const SplitPlane& plane, doubl
 /// Whether a polygon is planar within `epsilon` of its plane and convex (no reflex corner), so
 /// that splitPolygon's pieces cover exactly it.
 bool isPlanarConvex(std::span<const dvec3> polygon, const SplitPlane& plane, double epsilon);
+
+/// "On the plane" for a scene: 1e-9 of its size (the larger of its bounding box's diagonal and its
+/// largest coordinate), far above double rounding of a plane distance, far below any feature.
+double sceneEpsilon(const Scene& scene);
+
+/// The scene's faces as convex planar polygons, in face order: a face that is convex and planar
+/// within `epsilon` as itself, any other as its triangles; faces of no area left out. `visit`
+/// gets the vertices, the plane, the face and a triangle of it.
+using PolygonVisitor =
+    std::function<void(std::span<const dvec3> vertices, const SplitPlane& plane, uint32_t face, uint32_t triangle)>;
+void forEachConvexPolygon(const Scene& scene, double epsilon, const PolygonVisitor& visit);
+
+/// A polygon whose vertices are pool[first, first + count), part of scene face `face`.
+struct PolygonRef {
+  uint32_t first = 0, count = 0;
+  uint32_t face = 0;
+};
+
+/// Pieces of one face meet along its cuts, and a later cut of one piece puts a vertex on the
+/// shared edge that its neighbour lacks (a T-junction): snapped to the pixel grid, the two would
+/// leave cracks at a few pixel centres. So every polygon's edges get, in order, the vertices of
+/// its face's other polygons that lie on them (within epsilon); a polygon that gains vertices
+/// gets new storage at the end of `pool`.
+void closeTJunctions(std::vector<dvec3>& pool, std::span<PolygonRef> polygons, double epsilon);
 
 }  // namespace hsr::algo

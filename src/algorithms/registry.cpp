@@ -26,6 +26,8 @@ std::vector<AlgorithmInfo>& registry() {
       algo::bspAlgorithm(),
       algo::hzbAlgorithm(),
       algo::midpointAlgorithm(),
+      algo::newellAlgorithm(),
+      algo::abufferAlgorithm(),
     };
     for (const AlgorithmInfo& a : builtIn) checkDeclaration(a);
     return builtIn;

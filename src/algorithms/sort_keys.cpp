@@ -116,6 +116,15 @@ bool depthRangesSeparate(const Scene& scene, const Camera& camera) {
   return true;
 }
 
+std::vector<uint32_t> transparentLast(const Scene& scene, const Camera& camera, const std::vector<uint32_t>& opaqueRank,
+                                      SortKey key) {
+  const std::vector<uint32_t> backToFront = faceRanks(faceKeys(scene, camera, key), /*backToFront=*/true);
+  const uint32_t faces = uint32_t(scene.faceCount());
+  std::vector<uint32_t> rank(faces);
+  for (uint32_t f = 0; f < faces; ++f) rank[f] = scene.faceColors[f].a == 255 ? opaqueRank[f] : faces + backToFront[f];
+  return rank;
+}
+
 OrderFn byFaceRank(std::vector<uint32_t> rank) {
   return [rank = std::move(rank)](std::vector<SetupTriangle>& tris) {
     std::stable_sort(tris.begin(), tris.end(),

@@ -35,6 +35,11 @@ std::vector<uint32_t> faceRanks(const std::vector<double>& keys, bool backToFron
 /// other, and the painter's order is exact.
 bool depthRangesSeparate(const Scene& scene, const Camera& camera);
 
+/// The ranks of the z-buffer family's transparent pass: the opaque faces first, in the order of
+/// `opaqueRank`, then the transparent ones (alpha below 255) back to front by `key`.
+std::vector<uint32_t> transparentLast(const Scene& scene, const Camera& camera, const std::vector<uint32_t>& opaqueRank,
+                                      SortKey key);
+
 /// Reorders set-up triangles by their face's rank (stable: a face's triangles keep their order).
 OrderFn byFaceRank(std::vector<uint32_t> rank);
 

@@ -12,8 +12,13 @@ namespace {
 void sortedZbuffer(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
                    Frame& frame) {
   const SortKey key = sortKeyOf(params.text("sort-key"));
-  drawScene(scene, camera, options, WriteRule::DepthTest, drawRasterOf(params),
-            byFaceRank(faceRanks(faceKeys(scene, camera, key), /*backToFront=*/false)), frame);
+  std::vector<uint32_t> rank = faceRanks(faceKeys(scene, camera, key), /*backToFront=*/false);
+  // With transparency: the opaque faces front to back, then the transparent ones back to front,
+  // depth-tested without depth writes.
+  const bool transparent = hasTransparency(scene);
+  if (transparent) rank = transparentLast(scene, camera, rank, key);
+  drawScene(scene, camera, options, transparent ? WriteRule::DepthTestBlend : WriteRule::DepthTest,
+            drawRasterOf(params), byFaceRank(std::move(rank)), frame);
   frame.stats.setDetail("sort_key", params.text("sort-key"));
 }
 

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "algorithms/algorithms.hpp"
 #include "algorithms/bvh.hpp"
 #include "core/parallel.hpp"
 #include "frontend/frontend.hpp"
@@ -212,5 +213,35 @@ VerifyResult verifyPixels(const Scene& scene, const Camera& camera, const Render
   }
   return result;
 }
+
+namespace algo {
+
+ColorError colorError(const Frame& frame, const Frame& reference, const std::vector<uint8_t>* nearEdge) {
+  ColorError e;
+  const size_t n = std::min(frame.color.size(), reference.color.size());
+  uint64_t sum[3] = {0, 0, 0};
+  const bool ids = frame.faceId.size() == n && reference.faceId.size() == n;
+  for (size_t i = 0; i < n; ++i) {
+    if (ids && frame.faceId[i] != reference.faceId[i]) continue;  // a wrong or ambiguous pixel: the id check's
+    if (nearEdge && (*nearEdge)[i]) {
+      ++e.nearEdge;
+      continue;
+    }
+    ++e.pixels;
+    const Rgba8 a = frame.color[i], b = reference.color[i];
+    const int d[3] = {std::abs(int(a.r) - int(b.r)), std::abs(int(a.g) - int(b.g)), std::abs(int(a.b) - int(b.b))};
+    bool beyond = false;
+    for (int c = 0; c < 3; ++c) {
+      e.max[c] = std::max(e.max[c], d[c]);
+      sum[c] += uint64_t(d[c]);
+      beyond |= d[c] > 1;
+    }
+    e.beyondStep += beyond;
+  }
+  for (int c = 0; c < 3; ++c) e.mean[c] = e.pixels ? double(sum[c]) / double(e.pixels) : 0.0;
+  return e;
+}
+
+}  // namespace algo
 
 }  // namespace hsr

@@ -17,6 +17,7 @@
 // testing them against a z-pyramid kept over the textbook z-buffer (hzb.cpp: zbufferOcclusionCulled).
 #include "algorithms/algorithms.hpp"
 #include "algorithms/draw.hpp"
+#include "algorithms/sort_keys.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -85,9 +86,24 @@ void zbufferInSlices(const Scene& scene, const Camera& camera, const RenderOptio
   frame.stats.setDetail("depth_slices", uint64_t(slices));
 }
 
+// Opaque faces first in submission order, then the transparent ones back to front by their
+// centroids, depth-tested without depth writes (the tiled rasterizer's kernel has no such pass:
+// its transparent frames are drawn by the service's binned rasterizer).
+void zbufferWithTransparency(const Scene& scene, const Camera& camera, const RenderOptions& options,
+                             const std::string& raster, Frame& frame) {
+  std::vector<uint32_t> submission(scene.faceCount());
+  for (uint32_t f = 0; f < submission.size(); ++f) submission[f] = f;
+  const DrawRaster r = raster == "scanline"                      ? DrawRaster::Scanline
+                       : raster == "tiled" || raster == "binned" ? DrawRaster::Binned
+                                                                 : DrawRaster::HalfSpace;
+  drawScene(scene, camera, options, WriteRule::DepthTestBlend, r,
+            byFaceRank(transparentLast(scene, camera, submission, SortKey::Centroid)), frame);
+}
+
 void zbuffer(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
              Frame& frame) {
   const std::string& raster = params.text("raster");
+  if (hasTransparency(scene)) return zbufferWithTransparency(scene, camera, options, raster, frame);
   if (params.flag("occlusion-cull")) {
     if (params.integer("depth-slices") > 1)
       throw InputError("--param occlusion-cull=on: culls against one depth buffer over the whole range; drop "

@@ -84,6 +84,27 @@ void render(const Scene& scene, const Camera& camera, const RenderOptions& optio
     frame.stats.ambiguous_pixels = v.ambiguous_pixels;
     frame.stats.addTime("verify_reference", reference.stats.time_ms.back().second);
     frame.stats.addTime("verify_compare", verifyTimer.ms());
+    // With transparency, the colours against the A-buffer (the colour reference).
+    if (algo::hasTransparency(scene) && has(options.outputs, FrameOutputs::Color)) {
+      Timer colorTimer;
+      Frame colors;
+      colors.allocate(camera.width, camera.height);
+      algo::beginStats(colors.stats, scene, camera);
+      std::vector<uint8_t> nearEdge;
+      algo::abufferFrame(scene, camera, refOptions, colors, &nearEdge);
+      const algo::ColorError e = algo::colorError(frame, colors, &nearEdge);
+      Stats& st = frame.stats;
+      st.setDetail("verify_color_pixels", e.pixels);
+      st.setDetail("verify_color_near_edge", e.nearEdge);
+      st.setDetail("verify_color_max_r", uint64_t(e.max[0]));
+      st.setDetail("verify_color_max_g", uint64_t(e.max[1]));
+      st.setDetail("verify_color_max_b", uint64_t(e.max[2]));
+      st.setDetail("verify_color_mean_r", e.mean[0]);
+      st.setDetail("verify_color_mean_g", e.mean[1]);
+      st.setDetail("verify_color_mean_b", e.mean[2]);
+      st.setDetail("verify_color_beyond_step", e.beyondStep);
+      st.addTime("verify_colors", colorTimer.ms());
+    }
   }
 }
 

@@ -133,6 +133,11 @@ const std::vector<SceneDef>& sceneDefs() {
        {},
        makePainterCycle},
       {"interpenetrate", "two quads passing through each other", {}, makeInterpenetrate},
+      {"glass",
+       "transparent polygons over an opaque floor: three bars overlapping cyclically and two quads through "
+       "each other (opacity 0.5 to 0.7)",
+       {},
+       makeGlass},
       {"zfight",
        "two nearly coplanar polygons, far/near = 10^4: u16 depth fights, f32:reversed does not",
        {realParam("gap", "1e-4", 0, 0.5, "distance between the surfaces relative to eye depth")},

@@ -104,6 +104,42 @@ Scene makeInterpenetrate(const Args&) {
   return scene;
 }
 
+// Transparency: an opaque floor, over it three translucent bars in a cycle (as painter-cycle,
+// none in front of all the others) and two translucent quads through each other (as
+// interpenetrate): no order of whole faces blends them right, every pixel of the overlaps needs
+// its fragments in depth order.
+Scene makeGlass(const Args&) {
+  Scene scene;
+  scene.beginMesh("floor");
+  addPolygon(scene, {{-4, -4, -1.6}, {4, -4, -1.6}, {4, 4, -1.6}, {-4, 4, -1.6}}, Rgba8{200, 200, 190, 255});
+  const double root3half = std::sqrt(3.0) / 2, radius = 2, extension = 0.6, halfWidth = 0.35;
+  const dvec2 corner[3] = {{0, radius}, {-root3half * radius, -0.5 * radius}, {root3half * radius, -0.5 * radius}};
+  const Rgba8 colors[3] = {{230, 60, 50, 150}, {60, 200, 80, 170}, {50, 90, 230, 128}};
+  for (int i = 0; i < 3; ++i) {
+    const dvec2 from = corner[i], to = corner[(i + 1) % 3];
+    const dvec2 along = glm::normalize(to - from), across(-along.y, along.x);
+    const dvec2 start = from - extension * along, end = to + extension * along;
+    const auto at = [&](dvec2 p, double z) { return dvec3(p.x, p.y, z); };
+    scene.beginMesh("bar" + std::to_string(i));
+    addPolygon(scene,
+               {at(start - halfWidth * across, -1), at(end - halfWidth * across, 1),
+                at(end + halfWidth * across, 1), at(start + halfWidth * across, -1)},
+               colors[i]);
+  }
+  const auto quad = [&](const char* name, const dmat3& turn, Rgba8 color) {
+    scene.beginMesh(name);
+    const dvec3 shift(0, 0.2, 0.3);
+    addPolygon(scene,
+               {shift + turn * dvec3(-0.9, -0.9, 0), shift + turn * dvec3(0.9, -0.9, 0),
+                shift + turn * dvec3(0.9, 0.9, 0), shift + turn * dvec3(-0.9, 0.9, 0)},
+               color);
+  };
+  quad("pane-a", rotationY(12.0 / 13, 5.0 / 13), Rgba8{240, 200, 40, 160});
+  quad("pane-b", rotationY(12.0 / 13, -5.0 / 13), Rgba8{200, 60, 220, 140});
+  scene.camera = perspectiveCamera({0, -3.5, 11}, {0, 0.2, -0.3}, 32, 2, 30);
+  return scene;
+}
+
 // Z-fighting: a rectangle, and in front of it a diamond made by scaling the diamond's points in
 // the rectangle's plane towards the eye by (1 - gap). Every point of the diamond is therefore
 // nearer by exactly `gap` times its eye depth and projects where its source point does. The

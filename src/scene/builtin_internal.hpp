@@ -104,6 +104,7 @@ Scene makePainterMidpoint(const Args&);
 Scene makePainterCycle(const Args&);
 Scene makeInterpenetrate(const Args&);
 Scene makeZfight(const Args&);
+Scene makeGlass(const Args&);
 Scene makeRandom(const Args&);
 Scene makeSphere(const Args&);
 Scene makeLayers(const Args&);

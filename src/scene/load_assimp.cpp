@@ -1,6 +1,7 @@
 // Every format without an own loader (glTF/GLB, 3DS, DAE, FBX, ...) through assimp: polygons
 // kept as polygons, node transforms flattened in double, one mesh range per mesh instance.
 // Produces an unfinalized Scene for loadScene() (load.cpp); behaviour in docs/loaders.md.
+#include <assimp/GltfMaterial.h>
 #include <assimp/Importer.hpp>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
@@ -25,7 +26,7 @@ dmat4 toDmat4(const aiMatrix4x4& m) {
 }
 
 /// A material's colour: glTF's base colour factor or the classic diffuse colour, with its
-/// alpha times the opacity. assimp's stand-in material (formats without any) is the default grey.
+/// alpha times the opacity (as glTF's alphaMode says). assimp's stand-in material (formats without any) is the default grey.
 Rgba8 materialColor(const aiMaterial* material) {
   if (!material) return kDefaultColor;
   aiString name;
@@ -37,7 +38,19 @@ Rgba8 materialColor(const aiMaterial* material) {
     return kDefaultColor;
   float opacity = 1;
   material->Get(AI_MATKEY_OPACITY, opacity);
-  return Rgba8{unitToByte(color.r), unitToByte(color.g), unitToByte(color.b), unitToByte(double(color.a) * opacity)};
+  double alpha = double(color.a) * opacity;
+  // glTF (its materials carry alphaMode): the base colour's alpha alone (assimp also copies it into
+  // the opacity); OPAQUE (the default) ignores it; MASK is opaque from alphaCutoff (0.5) up, else
+  // fully transparent; BLEND blends.
+  aiString mode;
+  if (material->Get(AI_MATKEY_GLTF_ALPHAMODE, mode) == AI_SUCCESS) {
+    alpha = color.a;
+    float cutoff = 0.5f;
+    material->Get(AI_MATKEY_GLTF_ALPHACUTOFF, cutoff);
+    if (std::strcmp(mode.C_Str(), "OPAQUE") == 0) alpha = 1;
+    if (std::strcmp(mode.C_Str(), "MASK") == 0) alpha = alpha >= cutoff ? 1 : 0;
+  }
+  return Rgba8{unitToByte(color.r), unitToByte(color.g), unitToByte(color.b), unitToByte(alpha)};
 }
 
 class AssimpReader {
