@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "core/parallel.hpp"
+#include "output_set.hpp"
 
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
@@ -311,6 +312,7 @@ struct RenderFlags {
   std::string out, ids, depth, depthImage, overdrawImage, stats;
   std::string instanceIds, barycentric;  // attributes resolved from the ids (hsr/views.hpp)
   bool verify = false, quiet = false, json = false;
+  std::vector<hsr::cli::OutputFlag> outputFlags;  // every output flag, checked as a set
 };
 
 // The human summary of one rendered frame.
@@ -373,7 +375,9 @@ int runRender(const RenderFlags& f) {
                             {f.depth, hsr::OutputKind::Depth, hsr::writeDepth},
                             {f.depthImage, hsr::OutputKind::DepthImage, hsr::writeDepthImage},
                             {f.overdrawImage, hsr::OutputKind::OverdrawImage, hsr::writeOverdrawImage}};
-  // Reject output names no writer knows before any work is done.
+  // Reject output names no writer knows, or that name no file, a special file or another
+  // output's file, before any work is done.
+  hsr::cli::checkOutputSet(f.outputFlags);
   for (const Output& o : outputs)
     if (!o.path.empty()) hsr::checkOutputPath(o.kind, o.path);
   if (f.view.depthOnly && (!f.out.empty() || !f.ids.empty()))
@@ -395,20 +399,25 @@ int runRender(const RenderFlags& f) {
   hsr::Frame frame = hsr::render(job.scene, job.camera, job.options);
   double wallMs = millisecondsSince(start);
 
+  // All outputs or none: each is written to a temporary file, and all are renamed at the end.
   std::vector<std::string> written;
-  for (const Output& o : outputs) {
-    if (o.path.empty()) continue;
-    o.write(frame, o.path);
-    written.push_back(o.path);
-  }
-  writeAttributeOutputs(f, job, frame, written);
   const std::string statsJson = frame.stats.toJson();
-  if (!f.stats.empty()) {
-    hsr::writeTextFile(statsJson + "\n", f.stats);
-    written.push_back(f.stats);
+  {
+    hsr::OutputBatch batch;
+    for (const Output& o : outputs) {
+      if (o.path.empty()) continue;
+      o.write(frame, o.path);
+      written.push_back(o.path);
+    }
+    writeAttributeOutputs(f, job, frame, written);
+    if (!f.stats.empty() && f.stats != "-") {
+      hsr::writeTextFile(statsJson + "\n", f.stats);
+      written.push_back(f.stats);
+    }
+    batch.commit();
   }
 
-  if (f.json)
+  if (f.json || f.stats == "-")  // --stats -: the statistics JSON on standard output
     fmt::print("{}\n", statsJson);
   else if (!f.quiet)
     printSummary(job, frame.stats, wallMs, written);
@@ -444,7 +453,14 @@ Runner setupRender(CLI::App& cmd) {
                  "background; for a triangle face, of its vertices in file order (--ids names the face)")
       ->type_name("BARY.npy")
       ->group(outputs);
-  cmd.add_option("--stats", f->stats, "Statistics JSON")->type_name("STATS.json")->group(outputs);
+  cmd.add_option("--stats", f->stats, "Statistics JSON ('-': standard output, as --json)")->type_name("STATS.json")->group(outputs);
+  const std::pair<const char*, std::string*> outputFlags[] = {
+      {"--out", &f->out},           {"--ids", &f->ids},
+      {"--depth", &f->depth},       {"--depth-image", &f->depthImage},
+      {"--overdraw-image", &f->overdrawImage}, {"--instance-ids", &f->instanceIds},
+      {"--barycentric", &f->barycentric},      {"--stats", &f->stats}};
+  for (auto [flag, path] : outputFlags)
+    f->outputFlags.push_back({flag, cmd.get_option(flag), path, std::string_view(flag) == "--stats"});
   cmd.add_flag("--verify", f->verify, "Also render the exact reference and count wrong/ambiguous pixels");
   cmd.add_flag("--json", f->json, "Print the statistics JSON to stdout instead of the summary");
   cmd.add_flag("-q,--quiet", f->quiet, "Print nothing on success");

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -437,4 +438,49 @@ TEST_F(CommandLine, CompareRefusesBadArgumentsBeforeRunning) {
     EXPECT_TRUE(bad.oneErrorLine()) << args << "\n" << bad;
   }
   EXPECT_FALSE(fs::exists(file("s")));
+}
+
+// --- Outputs as a set, cameras, messages (issue 53) -------------------------------------------
+
+// An output path that exists and is not a regular file (a FIFO, a device, a directory) is
+// refused before any work, and left as it was; "-" is standard output for --stats only.
+TEST_F(CommandLine, OutputsNeverReplaceSpecialFiles) {
+  ASSERT_EQ(::mkfifo(file("fifo.json").c_str(), 0600), 0);
+  fs::create_directory(file("dir.png"));
+  for (const char* args : {"--stats fifo.json", "--stats /dev/null", "-o dir.png", "--ids /dev/null", "-o -"}) {
+    Result r = hsr(std::string("render builtin:cubes --size 16x16 ") + args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r;
+    EXPECT_TRUE(r.oneErrorLine()) << args << "\n" << r;
+  }
+  EXPECT_TRUE(fs::is_fifo(file("fifo.json")));
+  EXPECT_TRUE(fs::is_directory(file("dir.png")));
+  EXPECT_TRUE(fs::is_character_file("/dev/null"));
+  Result r = hsr("render builtin:cubes --size 16x16 --stats -");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["width"], 16);
+  EXPECT_EQ(listing(), (std::vector<std::string>{"dir.png", "fifo.json"}));
+}
+
+// All outputs of a render are written, or none: a failing one removes the others' files.
+TEST_F(CommandLine, AFailedOutputLeavesNoOtherOutput) {
+  Result r = hsr("render builtin:cubes --size 16x16 -o good.png --depth good.npy --stats s.json --ids no/dir/ids.png");
+  EXPECT_EQ(r.status, 1) << r;
+  EXPECT_TRUE(r.oneErrorLine()) << r;
+  EXPECT_NE(r.err.find("no/dir/ids.png"), std::string::npos) << r;
+  EXPECT_TRUE(listing().empty());
+  r = hsr("render builtin:cubes --size 16x16 -o good.png --depth good.npy --stats s.json");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_EQ(listing(), (std::vector<std::string>{"good.npy", "good.png", "s.json"}));
+}
+
+// Two outputs naming one file, however spelt, and an empty output path are refused.
+TEST_F(CommandLine, DuplicateAndEmptyOutputPathsAreRefused) {
+  fs::create_directory(file("sub"));
+  for (const char* args : {"-o same.png --depth-image same.png", "-o a.png --overdraw-image ./sub/../a.png",
+                           "--ids i.npy --instance-ids i.npy", "-o \"\"", "--stats \"\"", "--depth ''"}) {
+    Result r = hsr(std::string("render builtin:cubes --size 16x16 ") + args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r;
+    EXPECT_TRUE(r.oneErrorLine()) << args << "\n" << r;
+  }
+  EXPECT_EQ(listing(), std::vector<std::string>{"sub"});
 }
