@@ -75,6 +75,18 @@ hsr::dvec3 parseVec3(const std::string& flag, const std::string& text) {
 struct ImageSize {
   int width = 0, height = 0;
 };
+
+// An OpenCV K whose principal point lies outside the image was most likely made for another
+// image size: say so (on stderr; the render goes on).
+void warnPrincipalPointOutside(const hsr::CameraSpec& spec, ImageSize size, const std::string& cameraName) {
+  if (spec.kind != hsr::CameraSpec::Kind::OpenCV) return;
+  const double cx = spec.K[0][2], cy = spec.K[1][2];
+  if (cx >= 0 && cx <= size.width && cy >= 0 && cy <= size.height) return;
+  fmt::print(stderr,
+             "hsr: warning: {}: K's principal point ({:g}, {:g}) lies outside the {}x{} image (give --size, or "
+             "'width' and 'height' in the camera JSON)\n",
+             cameraName, cx, cy, size.width, size.height);
+}
 ImageSize parseSize(const std::string& text) {
   size_t x = text.find_first_of("xX");
   ImageSize size;
@@ -167,6 +179,7 @@ struct ViewFlags {
   double fov = 0, near = 0, far = 0, ortho = 0;
   CLI::Option *fovFlag = nullptr, *nearFlag = nullptr, *farFlag = nullptr, *orthoFlag = nullptr;
   CLI::Option* outputsFlag = nullptr;
+  CLI::Option* sizeFlag = nullptr;
   hsr::RenderOptions options;  // algorithm and threads: set by CLI11 directly
 
   void declare(CLI::App& cmd) {
@@ -175,7 +188,7 @@ struct ViewFlags {
         ->required();
     cmd.add_option("--camera", cameraFile, "Camera JSON (OpenGL or OpenCV style); the flags below override it")
         ->type_name("CAM.json");
-    cmd.add_option("--size", size, "Image size")->type_name("WxH")->capture_default_str();
+    sizeFlag = cmd.add_option("--size", size, "Image size (default: the camera JSON's width and height, else 1280x720)")->type_name("WxH")->capture_default_str();
 
     cmd.add_option("--algorithm", options.algorithm, "Visibility algorithm: " + algorithmNames())
         ->type_name("NAME")
@@ -292,6 +305,8 @@ struct ViewFlags {
     if (orthoFlag->count()) spec.orthoHeight = ortho;
     if (nearFlag->count()) spec.near = near;
     if (farFlag->count()) spec.far = far;
+    if (!sizeFlag->count() && spec.width && spec.height) imageSize = {*spec.width, *spec.height};
+    warnPrincipalPointOutside(spec, imageSize, cameraName);
     job.camera = hsr::resolveCamera(spec, imageSize.width, imageSize.height, bounds, cameraName);
     return job;
   }
@@ -323,7 +338,8 @@ void printSummary(const Job& job, const hsr::Stats& s, double wallMs, const std:
   fmt::print("{}{} on {}: {}x{}{}, {} threads, cull {}\n", s.algorithm, params, job.sceneName, s.width, s.height,
              s.depth_format.empty() ? "" : ", depth " + s.depth_format, hsr::resolveThreads(job.options.threads),
              nameOf(kCullNames, job.options.cull));
-  fmt::print("  faces {}, triangles {} (clipped {}, degenerate {}; culled back-face {}, frustum {}, occlusion {})\n",
+  fmt::print("  faces {}, triangles {} (clipped {}, zero area on the pixel grid {}; culled back-face {}, frustum {}, "
+             "occlusion {})\n",
              s.faces, s.triangles, s.triangles_clipped, s.triangles_degenerate, s.culled_backface, s.culled_frustum,
              s.culled_occlusion);
   fmt::print("  covered {} pixels ({:.1f}%), overdraw {:.2f}, depth tests {}, writes {}, memory {:.1f} MB\n",
@@ -811,9 +827,9 @@ int runInfo(const std::string& sceneName, bool json) {
   if (bounds.empty())
     fmt::print("  bounds: empty\n");
   else
-    fmt::print("  bounds [{}, {}, {}] .. [{}, {}, {}]\n", bounds.lo.x, bounds.lo.y, bounds.lo.z, bounds.hi.x,
+    fmt::print("  bounds [{:.6g}, {:.6g}, {:.6g}] .. [{:.6g}, {:.6g}, {:.6g}] (--json: exact)\n", bounds.lo.x, bounds.lo.y, bounds.lo.z, bounds.hi.x,
                bounds.hi.y, bounds.hi.z);
-  fmt::print("  problems: {} degenerate, {} non-planar, {} concave faces\n", problems.degenerateFaces,
+  fmt::print("  problems: {} degenerate (not drawn), {} non-planar, {} concave faces\n", problems.degenerateFaces,
              problems.nonPlanarFaces, problems.concaveFaces);
   for (const std::string& note : problems.notes) fmt::print("    {}\n", note);
   fmt::print("  camera: {}\n",
