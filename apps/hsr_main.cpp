@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "core/parallel.hpp"
+#include "output_set.hpp"
 
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
@@ -74,6 +75,18 @@ hsr::dvec3 parseVec3(const std::string& flag, const std::string& text) {
 struct ImageSize {
   int width = 0, height = 0;
 };
+
+// An OpenCV K whose principal point lies outside the image was most likely made for another
+// image size: say so (on stderr; the render goes on).
+void warnPrincipalPointOutside(const hsr::CameraSpec& spec, ImageSize size, const std::string& cameraName) {
+  if (spec.kind != hsr::CameraSpec::Kind::OpenCV) return;
+  const double cx = spec.K[0][2], cy = spec.K[1][2];
+  if (cx >= 0 && cx <= size.width && cy >= 0 && cy <= size.height) return;
+  fmt::print(stderr,
+             "hsr: warning: {}: K's principal point ({:g}, {:g}) lies outside the {}x{} image (give --size, or "
+             "'width' and 'height' in the camera JSON)\n",
+             cameraName, cx, cy, size.width, size.height);
+}
 ImageSize parseSize(const std::string& text) {
   size_t x = text.find_first_of("xX");
   ImageSize size;
@@ -166,6 +179,7 @@ struct ViewFlags {
   double fov = 0, near = 0, far = 0, ortho = 0;
   CLI::Option *fovFlag = nullptr, *nearFlag = nullptr, *farFlag = nullptr, *orthoFlag = nullptr;
   CLI::Option* outputsFlag = nullptr;
+  CLI::Option* sizeFlag = nullptr;
   hsr::RenderOptions options;  // algorithm and threads: set by CLI11 directly
 
   void declare(CLI::App& cmd) {
@@ -174,7 +188,7 @@ struct ViewFlags {
         ->required();
     cmd.add_option("--camera", cameraFile, "Camera JSON (OpenGL or OpenCV style); the flags below override it")
         ->type_name("CAM.json");
-    cmd.add_option("--size", size, "Image size")->type_name("WxH")->capture_default_str();
+    sizeFlag = cmd.add_option("--size", size, "Image size (default: the camera JSON's width and height, else 1280x720)")->type_name("WxH")->capture_default_str();
 
     cmd.add_option("--algorithm", options.algorithm, "Visibility algorithm: " + algorithmNames())
         ->type_name("NAME")
@@ -291,6 +305,8 @@ struct ViewFlags {
     if (orthoFlag->count()) spec.orthoHeight = ortho;
     if (nearFlag->count()) spec.near = near;
     if (farFlag->count()) spec.far = far;
+    if (!sizeFlag->count() && spec.width && spec.height) imageSize = {*spec.width, *spec.height};
+    warnPrincipalPointOutside(spec, imageSize, cameraName);
     job.camera = hsr::resolveCamera(spec, imageSize.width, imageSize.height, bounds, cameraName);
     return job;
   }
@@ -311,6 +327,7 @@ struct RenderFlags {
   std::string out, ids, depth, depthImage, overdrawImage, stats, svg;
   std::string instanceIds, barycentric;  // attributes resolved from the ids (hsr/views.hpp)
   bool verify = false, quiet = false, json = false;
+  std::vector<hsr::cli::OutputFlag> outputFlags;  // every output flag, checked as a set
 };
 
 // The human summary of one rendered frame.
@@ -321,7 +338,8 @@ void printSummary(const Job& job, const hsr::Stats& s, double wallMs, const std:
   fmt::print("{}{} on {}: {}x{}{}, {} threads, cull {}\n", s.algorithm, params, job.sceneName, s.width, s.height,
              s.depth_format.empty() ? "" : ", depth " + s.depth_format, hsr::resolveThreads(job.options.threads),
              nameOf(kCullNames, job.options.cull));
-  fmt::print("  faces {}, triangles {} (clipped {}, degenerate {}; culled back-face {}, frustum {}, occlusion {})\n",
+  fmt::print("  faces {}, triangles {} (clipped {}, zero area on the pixel grid {}; culled back-face {}, frustum {}, "
+             "occlusion {})\n",
              s.faces, s.triangles, s.triangles_clipped, s.triangles_degenerate, s.culled_backface, s.culled_frustum,
              s.culled_occlusion);
   fmt::print("  covered {} pixels ({:.1f}%), overdraw {:.2f}, depth tests {}, writes {}, memory {:.1f} MB\n",
@@ -373,7 +391,9 @@ int runRender(const RenderFlags& f) {
                             {f.depth, hsr::OutputKind::Depth, hsr::writeDepth},
                             {f.depthImage, hsr::OutputKind::DepthImage, hsr::writeDepthImage},
                             {f.overdrawImage, hsr::OutputKind::OverdrawImage, hsr::writeOverdrawImage}};
-  // Reject output names no writer knows before any work is done.
+  // Reject output names no writer knows, or that name no file, a special file or another
+  // output's file, before any work is done.
+  hsr::cli::checkOutputSet(f.outputFlags);
   for (const Output& o : outputs)
     if (!o.path.empty()) hsr::checkOutputPath(o.kind, o.path);
   if (f.view.depthOnly && (!f.out.empty() || !f.ids.empty()))
@@ -400,26 +420,32 @@ int runRender(const RenderFlags& f) {
   hsr::Frame frame = hsr::render(job.scene, job.camera, job.options);
   double wallMs = millisecondsSince(start);
 
+  // All outputs or none: each is written to a temporary file, and all are renamed at the end.
   std::vector<std::string> written;
-  if (!f.svg.empty()) {  // the same order again, as polygons (timed apart from the frame)
-    const auto svgStart = std::chrono::steady_clock::now();
-    hsr::writeSvg(job.scene, job.camera, job.options, f.svg);
-    frame.stats.addTime("svg", millisecondsSince(svgStart));
-    written.push_back(f.svg);
-  }
-  for (const Output& o : outputs) {
-    if (o.path.empty()) continue;
-    o.write(frame, o.path);
-    written.push_back(o.path);
-  }
-  writeAttributeOutputs(f, job, frame, written);
-  const std::string statsJson = frame.stats.toJson();
-  if (!f.stats.empty()) {
-    hsr::writeTextFile(statsJson + "\n", f.stats);
-    written.push_back(f.stats);
+  std::string statsJson;
+  {
+    hsr::OutputBatch batch;
+    if (!f.svg.empty()) {  // the same order again, as polygons (timed apart from the frame)
+      const auto svgStart = std::chrono::steady_clock::now();
+      hsr::writeSvg(job.scene, job.camera, job.options, f.svg);
+      frame.stats.addTime("svg", millisecondsSince(svgStart));
+      written.push_back(f.svg);
+    }
+    statsJson = frame.stats.toJson();
+    for (const Output& o : outputs) {
+      if (o.path.empty()) continue;
+      o.write(frame, o.path);
+      written.push_back(o.path);
+    }
+    writeAttributeOutputs(f, job, frame, written);
+    if (!f.stats.empty() && f.stats != "-") {
+      hsr::writeTextFile(statsJson + "\n", f.stats);
+      written.push_back(f.stats);
+    }
+    batch.commit();
   }
 
-  if (f.json)
+  if (f.json || f.stats == "-")  // --stats -: the statistics JSON on standard output
     fmt::print("{}\n", statsJson);
   else if (!f.quiet)
     printSummary(job, frame.stats, wallMs, written);
@@ -455,12 +481,20 @@ Runner setupRender(CLI::App& cmd) {
                  "background; for a triangle face, of its vertices in file order (--ids names the face)")
       ->type_name("BARY.npy")
       ->group(outputs);
-  cmd.add_option("--stats", f->stats, "Statistics JSON")->type_name("STATS.json")->group(outputs);
+  cmd.add_option("--stats", f->stats, "Statistics JSON ('-': standard output, as --json)")->type_name("STATS.json")->group(outputs);
   cmd.add_option("--svg", f->svg,
                  "Vector image: the painting order of painter, newell or bsp as SVG polygons, back to front "
                  "(docs/vector-output.md)")
       ->type_name("IMAGE.svg")
       ->group(outputs);
+  const std::pair<const char*, std::string*> outputFlags[] = {
+      {"--out", &f->out},           {"--ids", &f->ids},
+      {"--depth", &f->depth},       {"--depth-image", &f->depthImage},
+      {"--overdraw-image", &f->overdrawImage}, {"--instance-ids", &f->instanceIds},
+      {"--barycentric", &f->barycentric},      {"--stats", &f->stats},
+      {"--svg", &f->svg}};
+  for (auto [flag, path] : outputFlags)
+    f->outputFlags.push_back({flag, cmd.get_option(flag), path, std::string_view(flag) == "--stats"});
   cmd.add_flag("--verify", f->verify, "Also render the exact reference and count wrong/ambiguous pixels");
   cmd.add_flag("--json", f->json, "Print the statistics JSON to stdout instead of the summary");
   cmd.add_flag("-q,--quiet", f->quiet, "Print nothing on success");
@@ -811,9 +845,9 @@ int runInfo(const std::string& sceneName, bool json) {
   if (bounds.empty())
     fmt::print("  bounds: empty\n");
   else
-    fmt::print("  bounds [{}, {}, {}] .. [{}, {}, {}]\n", bounds.lo.x, bounds.lo.y, bounds.lo.z, bounds.hi.x,
+    fmt::print("  bounds [{:.6g}, {:.6g}, {:.6g}] .. [{:.6g}, {:.6g}, {:.6g}] (--json: exact)\n", bounds.lo.x, bounds.lo.y, bounds.lo.z, bounds.hi.x,
                bounds.hi.y, bounds.hi.z);
-  fmt::print("  problems: {} degenerate, {} non-planar, {} concave faces\n", problems.degenerateFaces,
+  fmt::print("  problems: {} degenerate (not drawn), {} non-planar, {} concave faces\n", problems.degenerateFaces,
              problems.nonPlanarFaces, problems.concaveFaces);
   for (const std::string& note : problems.notes) fmt::print("    {}\n", note);
   fmt::print("  camera: {}\n",

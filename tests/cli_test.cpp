@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -437,4 +438,97 @@ TEST_F(CommandLine, CompareRefusesBadArgumentsBeforeRunning) {
     EXPECT_TRUE(bad.oneErrorLine()) << args << "\n" << bad;
   }
   EXPECT_FALSE(fs::exists(file("s")));
+}
+
+// --- Outputs as a set, cameras, messages (issue 53) -------------------------------------------
+
+// An output path that exists and is not a regular file (a FIFO, a device, a directory) is
+// refused before any work, and left as it was; "-" is standard output for --stats only.
+TEST_F(CommandLine, OutputsNeverReplaceSpecialFiles) {
+  ASSERT_EQ(::mkfifo(file("fifo.json").c_str(), 0600), 0);
+  fs::create_directory(file("dir.png"));
+  for (const char* args : {"--stats fifo.json", "--stats /dev/null", "-o dir.png", "--ids /dev/null", "-o -"}) {
+    Result r = hsr(std::string("render builtin:cubes --size 16x16 ") + args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r;
+    EXPECT_TRUE(r.oneErrorLine()) << args << "\n" << r;
+  }
+  EXPECT_TRUE(fs::is_fifo(file("fifo.json")));
+  EXPECT_TRUE(fs::is_directory(file("dir.png")));
+  EXPECT_TRUE(fs::is_character_file("/dev/null"));
+  Result r = hsr("render builtin:cubes --size 16x16 --stats -");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["width"], 16);
+  EXPECT_EQ(listing(), (std::vector<std::string>{"dir.png", "fifo.json"}));
+}
+
+// All outputs of a render are written, or none: a failing one removes the others' files.
+TEST_F(CommandLine, AFailedOutputLeavesNoOtherOutput) {
+  Result r = hsr("render builtin:cubes --size 16x16 -o good.png --depth good.npy --stats s.json --ids no/dir/ids.png");
+  EXPECT_EQ(r.status, 1) << r;
+  EXPECT_TRUE(r.oneErrorLine()) << r;
+  EXPECT_NE(r.err.find("no/dir/ids.png"), std::string::npos) << r;
+  EXPECT_TRUE(listing().empty());
+  r = hsr("render builtin:cubes --size 16x16 -o good.png --depth good.npy --stats s.json");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_EQ(listing(), (std::vector<std::string>{"good.npy", "good.png", "s.json"}));
+}
+
+// Two outputs naming one file, however spelt, and an empty output path are refused.
+TEST_F(CommandLine, DuplicateAndEmptyOutputPathsAreRefused) {
+  fs::create_directory(file("sub"));
+  for (const char* args : {"-o same.png --depth-image same.png", "-o a.png --overdraw-image ./sub/../a.png",
+                           "--ids i.npy --instance-ids i.npy", "-o \"\"", "--stats \"\"", "--depth ''"}) {
+    Result r = hsr(std::string("render builtin:cubes --size 16x16 ") + args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r;
+    EXPECT_TRUE(r.oneErrorLine()) << args << "\n" << r;
+  }
+  EXPECT_EQ(listing(), std::vector<std::string>{"sub"});
+}
+
+// A camera JSON may carry its image size (an OpenCV K fits only its own); --size overrides it;
+// a principal point outside the image is warned about.
+TEST_F(CommandLine, CameraJsonCarriesTheImageSize) {
+  const std::string pose = R"("world_to_camera": [[1,0,0,0],[0,1,0,0],[0,0,1,12],[0,0,0,1]])";
+  writeFile("cam.json", R"({"K": [[60,0,50],[0,60,40],[0,0,1]], "width": 64, "height": 48, )" + pose + "}");
+  Result r = hsr("render builtin:cubes --camera cam.json --json");
+  ASSERT_EQ(r.status, 0) << r;
+  nlohmann::json stats = nlohmann::json::parse(r.out);
+  EXPECT_EQ(stats["width"], 64);
+  EXPECT_EQ(stats["height"], 48);
+  EXPECT_TRUE(r.err.empty()) << r;
+  r = hsr("render builtin:cubes --camera cam.json --size 32x24 --json");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_EQ(nlohmann::json::parse(r.out)["width"], 32);
+  EXPECT_NE(r.err.find("warning: cam.json"), std::string::npos) << r;
+  EXPECT_NE(r.err.find("principal point (50, 40) lies outside the 32x24 image"), std::string::npos) << r;
+  writeFile("half.json", R"({"K": [[60,0,32],[0,60,24],[0,0,1]], "width": 64, )" + pose + "}");
+  writeFile("bad.json", R"({"K": [[60,0,32],[0,60,24],[0,0,1]], "width": 64.5, "height": 48, )" + pose + "}");
+  for (const char* camera : {"half.json", "bad.json"}) {
+    r = hsr(std::string("render builtin:cubes --camera ") + camera);
+    EXPECT_EQ(r.status, 2) << camera << "\n" << r;
+    EXPECT_TRUE(r.oneErrorLine()) << r;
+    EXPECT_NE(r.err.find(camera), std::string::npos) << r;
+  }
+}
+
+// Messages say what is wrong: an eye too far away is not an 'up' problem; `hsr info` prints
+// bounds with 6 significant digits whatever the format; the render summary and `hsr info` say
+// what their degenerate counts count.
+TEST_F(CommandLine, MessagesSayWhatIsWrong) {
+  Result r = hsr("render builtin:cubes --eye 1e300,0,0");
+  EXPECT_EQ(r.status, 2) << r;
+  EXPECT_TRUE(r.oneErrorLine()) << r;
+  EXPECT_NE(r.err.find("beyond 1e30"), std::string::npos) << r;
+  EXPECT_EQ(r.err.find("'up'"), std::string::npos) << r;
+
+  writeFile("t.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                     "element face 1\nproperty list uchar int vertex_indices\nend_header\n0.1 0 0\n1 0.3 0\n0 1 0.7\n"
+                     "3 0 1 2\n");
+  r = hsr("info t.ply");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_NE(r.out.find("bounds [0, 0, 0] .. [1, 1, 0.7]"), std::string::npos) << r;
+  EXPECT_NE(r.out.find("degenerate (not drawn)"), std::string::npos) << r;
+  r = hsr("render t.ply --size 16x16");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_NE(r.out.find("zero area on the pixel grid 0"), std::string::npos) << r;
 }

@@ -17,6 +17,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace fs = std::filesystem;
@@ -243,6 +244,43 @@ TEST_F(IoWriters, AtomicWriteReplacesAndLeavesNoTemporary) {
   std::vector<uint8_t> bytes = readFile(path("a.json"));
   EXPECT_EQ(std::string(bytes.begin(), bytes.end()), "{\"second\": 2}\n");
   EXPECT_EQ(listing(), std::vector<std::string>{"a.json"});
+}
+
+// writeFileAtomic never replaces what is not a regular file, and an OutputBatch writes all of
+// its files or none.
+TEST_F(IoWriters, SpecialFilesAreNeverReplacedAndBatchesAreAllOrNothing) {
+  ASSERT_EQ(::mkfifo(path("fifo.json").c_str(), 0600), 0);
+  EXPECT_THROW(hsr::writeTextFile("x", path("fifo.json")), std::runtime_error);
+  EXPECT_THROW(hsr::writeTextFile("x", "/dev/null"), std::runtime_error);
+  EXPECT_THROW(hsr::checkOutputTarget(path("fifo.json")), hsr::InputError);
+  EXPECT_THROW(hsr::checkOutputTarget(""), hsr::InputError);
+  EXPECT_NO_THROW(hsr::checkOutputTarget(path("new.json")));
+  EXPECT_TRUE(fs::is_fifo(path("fifo.json")));
+  fs::remove(path("fifo.json"));
+
+  hsr::writeTextFile("old", path("a.json"));
+  try {
+    hsr::OutputBatch batch;
+    hsr::writeTextFile("new", path("a.json"));
+    hsr::writeTextFile("b", path("b.json"));
+    EXPECT_FALSE(fs::exists(path("b.json")));  // staged, not yet in place
+    hsr::writeColorPng(makeFrame(2, 2), path("no/such/dir/c.png"));
+    batch.commit();
+    FAIL() << "no error";
+  } catch (const std::runtime_error&) {
+  }
+  EXPECT_EQ(listing(), std::vector<std::string>{"a.json"});  // no b.json, no temporaries
+  std::vector<uint8_t> bytes = readFile(path("a.json"));
+  EXPECT_EQ(std::string(bytes.begin(), bytes.end()), "old");
+  {
+    hsr::OutputBatch batch;
+    hsr::writeTextFile("new", path("a.json"));
+    hsr::writeTextFile("b", path("b.json"));
+    batch.commit();
+  }
+  EXPECT_EQ(listing(), (std::vector<std::string>{"a.json", "b.json"}));
+  bytes = readFile(path("a.json"));
+  EXPECT_EQ(std::string(bytes.begin(), bytes.end()), "new");
 }
 
 TEST_F(IoWriters, FailedWriteThrowsNamingPathAndKeepsOldFile) {

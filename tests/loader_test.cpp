@@ -580,6 +580,75 @@ TEST_F(LoaderJson, SelfInclusionIsRefused) {
   }
 }
 
+// --- Hostile input (issue 53) -------------------------------------------------------------------
+
+class LoaderHostile : public LoaderTest {};
+
+// A UTF-8 byte-order mark before the first line is skipped in every text format (it used to
+// swallow an OBJ's first vertex).
+TEST_F(LoaderHostile, ByteOrderMarkIsSkippedInEveryTextFormat) {
+  const std::string bom = "\xEF\xBB\xBF";
+  const std::pair<std::string, std::string> files[] = {
+      {"bom.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"},
+      {"bom.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"},
+      {"bom.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"},
+      {"bom.stl", "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
+                  "endfacet\nendsolid s\n"},
+      {"bom.json", R"({"meshes": [{"file": "bom.obj"}]})"}};
+  for (const auto& [name, text] : files) {
+    SCOPED_TRACE(name);
+    Scene s = loadScene(write(name, bom + text));
+    EXPECT_EQ(s.positions.size(), 3u);
+    EXPECT_EQ(s.triangles.size(), 1u);
+  }
+  // An MTL library with a mark keeps its first statement.
+  write("m.mtl", bom + "newmtl red\nKd 1 0 0\n");
+  Scene s = loadScene(write("mtl.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n"));
+  EXPECT_EQ(s.faceColors[0], (Rgba8{255, 0, 0, 255}));
+  EXPECT_TRUE(s.problems.notes.empty()) << s.problems.notes[0];
+}
+
+// A PLY header line of no PLY keyword (PLY/Wuson.ply of assimp's test models has "Created by
+// ...") is skipped and counted in a note naming its line, as assimp reads such files.
+TEST_F(LoaderHostile, UnknownPlyHeaderLinesAreSkippedWithANote) {
+  Scene s = loadScene(write("wuson.ply",
+                            "ply\nformat ascii 1.0\ncomment made by hand\nCreated by a 3D program\nelement vertex 3\n"
+                            "property float x\nproperty float y\nproperty float z\nelement face 1\n"
+                            "property list uchar int vertex_indices\nfoo bar\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
+  EXPECT_EQ(s.triangles.size(), 1u);
+  ASSERT_EQ(s.problems.notes.size(), 1u);
+  EXPECT_NE(s.problems.notes[0].find("wuson.ply:4: 2 header line(s) of no PLY keyword skipped (the first 'Created')"),
+            std::string::npos)
+      << s.problems.notes[0];
+}
+
+// A coordinate beyond 1e30 is named with the file's line and the format's own vertex number.
+TEST_F(LoaderHostile, HugeCoordinatesNameTheLineAndTheFormatsVertexNumber) {
+  expectError("huge.obj", "v 0 0 0\nv 1e31 0 0\nv 0 1 0\nf 1 2 3\n",
+              {"huge.obj:2: vertex 2 has a coordinate beyond 1e30 in magnitude"});
+  expectError("huge.off", "OFF\n3 1 0\n0 0 0\n1 -2e30 0\n0 1 0\n3 0 1 2\n",
+              {"huge.off:4: vertex 1 has a coordinate beyond 1e30 in magnitude"});
+  expectError("huge.ply",
+              "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\n"
+              "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1e31 0\n3 0 1 2\n",
+              {"huge.ply:12: vertex 2 has a coordinate beyond 1e30 in magnitude"});
+  expectError("huge.stl",
+              "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 0 5e30\nendloop\n"
+              "endfacet\nendsolid s\n",
+              {"huge.stl:6: vertex has a coordinate beyond 1e30 in magnitude"});
+}
+
+// A binary PLY's bad index is printed as the integer it is, not as "-5.000000".
+TEST_F(LoaderHostile, BinaryPlyIndexErrorsPrintIntegers) {
+  Bytes b;
+  b.text("ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n")
+      .text("property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n");
+  for (float c : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) b.put(c);
+  b.put(uint8_t(3)).put(int32_t(0)).put(int32_t(-5)).put(int32_t(2));
+  expectError("index.ply", b.s, {"face 0: vertex index -5 out of range (3 vertices)"});
+}
+
 // --- Dispatch -----------------------------------------------------------------------------------
 
 class LoaderDispatch : public LoaderTest {};

@@ -9,6 +9,7 @@
 #include <hwy/targets.h>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <random>
 #include <sstream>
 #include <string>
@@ -379,6 +380,49 @@ TEST(Raster, BatchedSetupEqualsScalarSetupOnEveryInstructionSet) {
   }
   hwy::SetSupportedTargetsForTest(0);
   EXPECT_GE(targets, 2);
+}
+
+// Lambert shading is per face, from the view ray to the face's centroid: for a face of many
+// vertices that centroid is summed once per frame, not once per triangle (which made a face of
+// 100 000 vertices take seconds). Every triangle of such a face, and of faces just below and
+// above the size where the per-frame sums start, gets 0.25 + 0.75 |cos| of its normal and the
+// ray from the eye to its face's centroid.
+TEST(Raster, LambertShadingOfLargeFacesUsesTheirCentroid) {
+  Scene scene;
+  const dvec3 centre{0.5, -0.25, 1}, axisU = glm::normalize(dvec3(1, 0.2, 0.3)),
+              axisV = glm::normalize(glm::cross(dvec3(0.1, 0.3, 1), axisU));
+  const int sizes[] = {15, 16, 17, 100000};
+  for (int n : sizes) {
+    std::vector<uint32_t> face;
+    for (int i = 0; i < n; ++i) {
+      const double a = 2 * std::numbers::pi * i / n, r = 1 + 0.5 * (n - 15);  // (faces apart)
+      face.push_back(uint32_t(scene.positions.size()));
+      scene.positions.push_back(centre * double(n) + r * (std::cos(a) * axisU + 0.5 * std::sin(a) * axisV));
+    }
+    scene.addFace(face, {200, 100, 50, 255});
+  }
+  scene.finalize();
+  CameraSpec spec;
+  spec.eye = {3, -40, 90000};
+  spec.target = {0, 0, 0};
+  const Camera cam = resolveCamera(spec, 64, 48, scene.bounds());
+  const TriangleShader shade(scene, cam, Shading::Lambert);
+  std::vector<dvec3> view;  // per face: from the eye to its centroid
+  for (size_t f = 0; f < scene.faceCount(); ++f) {
+    dvec3 centroid{0.0};
+    for (uint32_t v : scene.face(f)) centroid += scene.positions[v];
+    view.push_back(glm::normalize(centroid / double(scene.face(f).size()) - spec.eye));
+  }
+  for (uint32_t t = 0; t < scene.triangles.size(); ++t) {
+    const Triangle& tri = scene.triangles[t];
+    const dvec3 &a = scene.positions[tri.v[0]], &b = scene.positions[tri.v[1]], &c = scene.positions[tri.v[2]];
+    const dvec3 normal = glm::normalize(glm::cross(b - a, c - a));  // the triangle's own, as shaded
+    ASSERT_NEAR(shade.lambertFactor(t), 0.25 + 0.75 * std::abs(glm::dot(normal, view[tri.face])), 1e-12)
+        << "triangle " << t;
+  }
+  size_t triangles = 0;
+  for (int n : sizes) triangles += size_t(n - 2);
+  EXPECT_EQ(scene.triangles.size(), triangles);
 }
 
 // The batched Lambert shading (TriangleShader::lambertFactors and shadeMany, SIMD) gives bit for

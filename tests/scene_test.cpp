@@ -186,6 +186,34 @@ TEST(Scene, StraightVerticesLeaveNoTJunctions) {
   for (size_t v = 0; v < p.size(); ++v) EXPECT_TRUE(used[v]) << "vertex " << v << " is a T-junction";
 }
 
+// A polygon of many vertices has tiny turns and tiny ears, well-shaped for their size: a convex
+// one of 100 000 vertices is a fan of n - 2 triangles (it used to be called too tangled and lose
+// half its triangles), and a simple concave one is n - 2 triangles tiling it, with true notes.
+TEST(Scene, LargeSimplePolygonsGiveNMinusTwoTriangles) {
+  auto expectTiled = [](const Scene& s, const std::vector<dvec2>& poly, bool concave) {
+    EXPECT_EQ(s.triangles.size(), poly.size() - 2);
+    EXPECT_EQ(s.problems.concaveFaces, concave ? 1u : 0u);
+    EXPECT_EQ(s.problems.degenerateFaces, 0u);
+    for (const std::string& note : s.problems.notes) EXPECT_EQ(note.find("tangled"), std::string::npos) << note;
+    double sum = 0;
+    for (const Triangle& t : s.triangles) {
+      const double area2 = cross2(poly[t.v[1]] - poly[t.v[0]], poly[t.v[2]] - poly[t.v[0]]);
+      EXPECT_GT(area2, 0) << "triangle wound against the polygon";
+      sum += area2 / 2;
+    }
+    const double area = signedArea2(poly) / 2;
+    EXPECT_NEAR(sum, area, 1e-9 * area);
+  };
+  std::vector<dvec2> circle;
+  for (int i = 0; i < 100000; ++i) {
+    const double a = 2 * std::numbers::pi * i / 100000;
+    circle.push_back({std::cos(a), std::sin(a)});
+  }
+  expectTiled(polygonScene(circle), circle, false);
+  const std::vector<dvec2> fineStar = star(10000, 1.0, 0.999);  // 20 000 vertices, half reflex
+  expectTiled(polygonScene(fineStar), fineStar, true);
+}
+
 TEST(Scene, DegenerateFacesAreCountedNotDrawn) {
   Scene s;
   s.source = "test:degenerate";

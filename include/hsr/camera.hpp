@@ -32,6 +32,10 @@ struct CameraSpec {
 
   // Clipping planes (eye depth). Unset: chosen from the scene bounds.
   std::optional<double> near, far;
+
+  // The image size the camera was made for (a camera JSON's "width" and "height", both or
+  // neither), used when the caller gives none: an OpenCV K only fits its own image size.
+  std::optional<int> width, height;
 };
 
 /// Parses a camera JSON (either style, docs/conventions.md). Throws InputError "file: problem".

@@ -6,6 +6,8 @@
 #include <hsr/scene.hpp>
 
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace hsr {
 
@@ -30,7 +32,33 @@ enum class OutputKind : uint8_t { Color, FaceIds, Depth, DepthImage, OverdrawIma
 /// not know `path`'s extension (the writers check the same way).
 void checkOutputPath(OutputKind kind, const std::string& path);
 
-/// Writes `bytes` to `path` atomically (temporary file + rename). Throws std::runtime_error.
+/// Writes `bytes` to `path` atomically (temporary file + rename). Throws std::runtime_error,
+/// also when `path` exists and is not a regular file (a device, FIFO, socket or directory is
+/// never replaced).
 void writeFileAtomic(const std::string& path, const void* bytes, size_t size);
+
+/// Throws InputError "path: ..." when `path` is empty or names something that exists and is not
+/// a regular file: what writeFileAtomic refuses, checked before any work is done.
+void checkOutputTarget(const std::string& path);
+
+/// All outputs or none. While a batch is alive on this thread, writeFileAtomic (so every writer
+/// above) leaves each file in its temporary; commit() renames them all into place. A batch
+/// destroyed without commit() (an exception) removes its temporaries, so no output is written.
+class OutputBatch {
+ public:
+  OutputBatch();
+  ~OutputBatch();
+  OutputBatch(const OutputBatch&) = delete;
+  OutputBatch& operator=(const OutputBatch&) = delete;
+  /// Renames every staged file into place, in the order written. Throws std::runtime_error if a
+  /// rename fails; the files not yet renamed are then removed.
+  void commit();
+  /// Called by writeFileAtomic: takes over temporary file `temp`, to become `target`.
+  void stage(std::string temp, std::string target);
+
+ private:
+  std::vector<std::pair<std::string, std::string>> staged_;  // (temporary, target)
+  OutputBatch* outer_;
+};
 
 }  // namespace hsr

@@ -2,6 +2,7 @@
 // Consumed by every algorithm through Camera (include/hsr/camera.hpp), and by the CLI.
 #include <hsr/camera.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -49,13 +50,26 @@ void readMatrix(const json& j, const char* key, double (&m)[R][C], const std::st
   }
 }
 
+// A camera JSON's image side: a whole number of pixels, 1 to 16384 (the CLI's --size range).
+int readSide(const json& j, const char* key, const std::string& src) {
+  const json& v = j.at(key);
+  if (!v.is_number_integer() || v.get<int64_t>() < 1 || v.get<int64_t>() > 16384)
+    throw InputError(src + ": camera: '" + key + "' must be a whole number of pixels, 1 to 16384");
+  return int(v.get<int64_t>());
+}
+
+// Beyond this magnitude eye and target are refused: their difference's squared length overflows.
+constexpr double kMaxCoordinate = 1e30;
+bool huge(const dvec3& v) { return std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)}) > kMaxCoordinate; }
+
 }  // namespace
 
 CameraSpec parseCameraJson(const std::string& text, const std::string& src) {
   json j = parseJsonOrThrow(text, src);
   if (!j.is_object()) throw InputError(src + ": camera: expected a JSON object");
   CameraSpec spec;
-  static const char* known[] = {"eye", "target", "up", "fovy_deg", "near", "far", "ortho_height", "K", "world_to_camera"};
+  static const char* known[] = {"eye", "target", "up", "fovy_deg", "near", "far", "ortho_height", "K", "world_to_camera",
+                                "width", "height"};
   for (auto& [k, v] : j.items()) {
     bool ok = false;
     for (const char* n : known) ok = ok || k == n;
@@ -79,6 +93,12 @@ CameraSpec parseCameraJson(const std::string& text, const std::string& src) {
   }
   if (j.contains("near")) spec.near = readNumber(j, "near", src);
   if (j.contains("far")) spec.far = readNumber(j, "far", src);
+  if (j.contains("width") != j.contains("height"))
+    throw InputError(src + ": camera: give both 'width' and 'height' (the image size) or neither");
+  if (j.contains("width")) {
+    spec.width = readSide(j, "width", src);
+    spec.height = readSide(j, "height", src);
+  }
   return spec;
 }
 
@@ -99,6 +119,10 @@ std::string cameraSpecToJson(const CameraSpec& s) {
   }
   if (s.near) j["near"] = *s.near;
   if (s.far) j["far"] = *s.far;
+  if (s.width && s.height) {
+    j["width"] = *s.width;
+    j["height"] = *s.height;
+  }
   return j.dump(2);
 }
 
@@ -162,6 +186,8 @@ Camera resolveCamera(const CameraSpec& spec, int width, int height, const Bounds
   if (spec.kind == CameraSpec::Kind::OpenGL) {
     if (!finite(spec.eye) || !finite(spec.target) || !finite(spec.up))
       throw InputError(src + ": camera: eye, target and up must be finite");
+    if (huge(spec.eye) || huge(spec.target))
+      throw InputError(src + ": camera: eye or target has a coordinate beyond 1e30 in magnitude");
     dvec3 f = spec.target - spec.eye;
     if (glm::length(f) == 0) throw InputError(src + ": camera: eye and target are the same point");
     f = glm::normalize(f);

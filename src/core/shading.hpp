@@ -3,6 +3,8 @@
 #pragma once
 #include <hsr/render.hpp>
 
+#include <vector>
+
 namespace hsr {
 
 /// A distinct, deterministic colour for face `face` (used by Shading::FaceId).
@@ -39,6 +41,16 @@ class TriangleShader {
   // three vertices is one triangle, so when there are as many triangles as faces and three
   // indices a face, each face made its triangle).
   bool ownFaces_;
+  // For each face of more than kSmallFace vertices, in face order: the sum of (p - p0) over its
+  // vertices p (p0 its first), so the view ray to its centroid costs O(1) per triangle rather
+  // than O(polygon). Empty when every face is a triangle or the camera is orthographic.
+  static constexpr size_t kSmallFace = 16;
+  struct LargeFace {
+    uint32_t face;
+    dvec3 sum;
+  };
+  std::vector<LargeFace> largeFaces_;
+  dvec3 centroidRay(const Triangle& tri) const;
   bool ownFace(const Triangle& tri) const {
     const auto polygon = scene_.face(tri.face);
     return polygon.size() == 3 && polygon[0] == tri.v[0] && polygon[1] == tri.v[1] && polygon[2] == tri.v[2];

@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cstring>
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace hsr {
@@ -37,12 +38,52 @@ class TempFile {
   int fd_ = -1;
 };
 
+thread_local OutputBatch* currentBatch = nullptr;
+
+// Why an existing `path` must not be replaced, or nullptr when it may (absent or regular).
+const char* notRegular(const std::string& path) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0 || S_ISREG(st.st_mode)) return nullptr;
+  if (S_ISDIR(st.st_mode)) return "is a directory";
+  if (S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode)) return "is a device";
+  if (S_ISFIFO(st.st_mode)) return "is a FIFO";
+  if (S_ISSOCK(st.st_mode)) return "is a socket";
+  return "is not a regular file";
+}
+
 }  // namespace
+
+void checkOutputTarget(const std::string& path) {
+  if (path.empty()) throw InputError("an output path is empty");
+  if (const char* why = notRegular(path))
+    throw InputError(path + ": " + why + ", not a regular file: refusing to replace it");
+}
+
+OutputBatch::OutputBatch() : outer_(currentBatch) { currentBatch = this; }
+
+OutputBatch::~OutputBatch() {
+  currentBatch = outer_;
+  for (const auto& [temp, target] : staged_) ::unlink(temp.c_str());
+}
+
+void OutputBatch::stage(std::string temp, std::string target) { staged_.emplace_back(std::move(temp), std::move(target)); }
+
+void OutputBatch::commit() {
+  while (!staged_.empty()) {
+    const auto& [temp, target] = staged_.front();
+    if (const char* why = notRegular(target))
+      throw std::runtime_error(target + ": " + why + ", not a regular file: refusing to replace it");
+    if (::rename(temp.c_str(), target.c_str()) != 0) throwErrno(target, "cannot replace file", errno);
+    staged_.erase(staged_.begin());
+  }
+}
 
 void writeFileAtomic(const std::string& path, const void* bytes, size_t size) {
   // A unique name in the target's own directory, so the final rename never crosses file
   // systems and concurrent writers (threads or processes) never share a temporary file.
   static std::atomic<uint64_t> counter{0};
+  if (const char* why = notRegular(path))
+    throw std::runtime_error(path + ": " + why + ", not a regular file: refusing to replace it");
   TempFile temp(path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
 
   temp.fd() = ::open(temp.path().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
@@ -61,7 +102,11 @@ void writeFileAtomic(const std::string& path, const void* bytes, size_t size) {
   temp.fd() = -1;
   if (::close(fd) != 0) throwErrno(path, "cannot write", errno);
 
-  if (::rename(temp.path().c_str(), path.c_str()) != 0) throwErrno(path, "cannot replace file", errno);
+  if (currentBatch) {
+    currentBatch->stage(temp.path(), path);  // renamed by OutputBatch::commit()
+  } else if (::rename(temp.path().c_str(), path.c_str()) != 0) {
+    throwErrno(path, "cannot replace file", errno);
+  }
   temp.release();
 }
 

@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -50,6 +51,24 @@ std::string readFile(const std::string& path) {
   in.read(bytes.data(), std::streamsize(size));
   if (size_t(in.gcount()) != size) throw InputError(path + ": cannot read file");
   return bytes;
+}
+
+std::string_view skipBom(std::string_view bytes) {
+  if (bytes.starts_with("\xEF\xBB\xBF")) bytes.remove_prefix(3);
+  return bytes;
+}
+
+const char* hugeCoordinate(const dvec3& p) {
+  return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kMaxCoordinate
+             ? "a coordinate beyond 1e30 in magnitude"
+             : nullptr;
+}
+
+std::string numberText(double v) {
+  char text[32];
+  if (v == std::floor(v) && std::abs(v) < 1e15) std::snprintf(text, sizeof text, "%.0f", v);
+  else std::snprintf(text, sizeof text, "%g", v);
+  return text;
 }
 
 uint8_t unitToByte(double v) {
@@ -225,15 +244,15 @@ Scene loadAny(const std::string& path, LoadContext& context) {
   const std::string ext = lowerExtension(path);
   Scene scene;
   if (ext == ".json") {
-    scene = loadSceneJson(path, readFile(path), context);
+    scene = loadSceneJson(path, skipBom(readFile(path)), context);
   } else if (ext == ".obj") {
-    scene = loadObj(path, readFile(path));
+    scene = loadObj(path, skipBom(readFile(path)));
   } else if (ext == ".ply") {
-    scene = loadPly(path, readFile(path));
+    scene = loadPly(path, skipBom(readFile(path)));
   } else if (ext == ".stl") {
-    scene = loadStl(path, readFile(path));
+    scene = loadStl(path, readFile(path));  // (a binary STL's header may start with any bytes: see loadStl)
   } else if (ext == ".off") {
-    scene = loadOff(path, readFile(path));
+    scene = loadOff(path, skipBom(readFile(path)));
   } else {
     checkFile(path);  // assimp reads the file itself; our messages for missing or empty files
     scene = loadAssimp(path);

@@ -108,6 +108,8 @@ class ObjReader {
       if (!parseDouble(tok, extra[n++])) sc_.fail("bad vertex value " + quote(tok) + " (not a finite number)");
     }
     if (n == 2) sc_.fail("expected x y z [w] or x y z r g b after 'v', found 5 numbers");
+    if (const char* huge = hugeCoordinate(p))
+      sc_.fail("vertex " + std::to_string(scene_.positions.size() + 1) + " has " + huge);
     scene_.positions.push_back(p);
     if (n >= 3) {
       // The first coloured vertex starts the colour array; earlier vertices have no colour.
@@ -186,7 +188,7 @@ class ObjReader {
       }
       anyLibraryRead_ = true;
       if (fs::file_size(file, ec) == 0) continue;  // an empty library defines nothing
-      readMtl(file, readFile(file), materials_);
+      readMtl(file, skipBom(readFile(file)), materials_);
     }
   }
 

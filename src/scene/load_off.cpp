@@ -120,7 +120,9 @@ class OffReader {
     if (numbers_.size() < 3 || (layout.colors ? colorCount != 3 && colorCount != 4 : colorCount != 0)) sc_.fail("vertex " + std::to_string(v) + ": expected x y z" + (layout.normals ? " nx ny nz" : "") +
                       (layout.colors ? " r g b [a]" : "") + (layout.textureCoords ? " s t" : "") + ", found " +
                       std::to_string(numbers_.size()) + " numbers");
-    scene_.positions.push_back({numbers_[0], numbers_[1], numbers_[2]});
+    const dvec3 p{numbers_[0], numbers_[1], numbers_[2]};
+    if (const char* huge = hugeCoordinate(p)) sc_.fail("vertex " + std::to_string(v) + " has " + huge);
+    scene_.positions.push_back(p);
     if (layout.colors) vertexColors_.push_back(color(layout.normals ? 6 : 3, size_t(colorCount)));
   }
 

@@ -59,6 +59,9 @@ struct PlyHeader {
   std::vector<PlyElement> elements;
   size_t bodyOffset = 0;  // first byte after end_header's line
   size_t bodyLine = 1;    // its line number (ascii)
+  // Lines of no PLY keyword ("Created by ...", as some exporters write): skipped, as assimp does.
+  size_t unknownLines = 0, firstUnknownLine = 0;
+  std::string firstUnknown;
 };
 
 PlyHeader readHeader(const std::string& path, std::string_view bytes) {
@@ -117,7 +120,12 @@ PlyHeader readHeader(const std::string& path, std::string_view bytes) {
       if (p.name.empty()) sc.fail("property without a name");
       h.elements.back().props.push_back(std::move(p));
     } else {
-      sc.fail("unknown header line " + quote(keyword));
+      if (h.unknownLines++ == 0) {
+        h.firstUnknownLine = sc.line();
+        h.firstUnknown = quote(keyword);
+      }
+      sc.restOfLine();
+      continue;
     }
     sc.expectLineEnd(("'" + std::string(keyword) + "' line").c_str());
   }
@@ -274,7 +282,7 @@ class PlyBodyReader {
       }
       double n = src_.read(p.countType);
       if (n < 0 || n > double(std::numeric_limits<uint32_t>::max()))
-        src_.fail("bad list length " + std::to_string(n) + " in " + quote(e.name) + " " + std::to_string(row_));
+        src_.fail("bad list length " + numberText(n) + " in " + quote(e.name) + " " + std::to_string(row_));
       onList(k, uint64_t(n));
     }
   }
@@ -291,6 +299,7 @@ class PlyBodyReader {
       dvec3 p{values_[size_t(x)], values_[size_t(y)], values_[size_t(z)]};
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
         src_.fail("vertex " + std::to_string(row_) + " has a non-finite coordinate");
+      if (const char* huge = hugeCoordinate(p)) src_.fail("vertex " + std::to_string(row_) + " has " + huge);
       scene_.positions.push_back(p);
       if (color.present()) vertexColors_.push_back(color.color(e, values_));
     }
@@ -311,7 +320,7 @@ class PlyBodyReader {
         for (uint64_t j = 0; j < n; ++j) {
           double v = src_.read(itemType);
           if (!(v >= 0 && v < double(vertexCount_)) || v != std::floor(v))
-            src_.fail("face " + std::to_string(row_) + ": vertex index " + std::to_string(v) +
+            src_.fail("face " + std::to_string(row_) + ": vertex index " + numberText(v) +
                       " out of range (" + std::to_string(vertexCount_) + " vertices)");
           indices_.push_back(uint32_t(v));
         }
@@ -343,6 +352,10 @@ Scene loadPly(const std::string& path, std::string_view bytes) {
   checkCounts(path, header, bytes.size() - header.bodyOffset);
   Scene scene;
   scene.source = path;
+  if (header.unknownLines)
+    scene.problems.notes.push_back(path + ":" + std::to_string(header.firstUnknownLine) + ": " +
+                                   std::to_string(header.unknownLines) + " header line(s) of no PLY keyword skipped (the first " +
+                                   header.firstUnknown + ")");
   if (header.format == PlyFormat::Ascii) {
     AsciiSource src(path, bytes, header.bodyOffset, header.bodyLine);
     PlyBodyReader<AsciiSource>(path, header, src, scene).run();

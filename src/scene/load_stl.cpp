@@ -39,6 +39,9 @@ Scene readBinary(const std::string& path, std::string_view bytes) {
       if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
         throw InputError(path + ": triangle " + std::to_string(t) + " has a non-finite coordinate (byte offset " +
                          std::to_string(p - bytes.data()) + ")");
+      if (const char* huge = hugeCoordinate(v))
+        throw InputError(path + ": triangle " + std::to_string(t) + " has " + huge + " (byte offset " +
+                         std::to_string(p - bytes.data()) + ")");
       scene.positions.push_back(v);
     }
     // VisCAM/SolidView colour: bit 15 set marks a valid colour, 5 bits each of red (10-14),
@@ -93,6 +96,7 @@ Scene readAscii(const std::string& path, std::string_view bytes) {
         v.x = sc.number("x coordinate");
         v.y = sc.number("y coordinate");
         v.z = sc.number("z coordinate");
+        if (const char* huge = hugeCoordinate(v)) sc.fail(std::string("vertex has ") + huge);
         indices.push_back(uint32_t(scene.positions.size()));
         scene.positions.push_back(v);
       }
@@ -122,7 +126,7 @@ Scene loadStl(const std::string& path, std::string_view bytes) {
   if (bytes.size() >= kHeaderBytes &&
       kHeaderBytes + kRecordBytes * uint64_t(le32(bytes.data() + 80)) == bytes.size())
     return readBinary(path, bytes);
-  if (startsWithSolid(bytes)) return readAscii(path, bytes);
+  if (startsWithSolid(skipBom(bytes))) return readAscii(path, skipBom(bytes));
   if (bytes.size() < kHeaderBytes)
     throw InputError(path + ": not an STL file (too short for a binary STL and no ASCII 'solid' line)");
   return readBinary(path, bytes);

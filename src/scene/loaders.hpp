@@ -36,6 +36,16 @@ Scene loadSceneJson(const std::string& path, std::string_view bytes, LoadContext
 /// file", "path: file is empty" or "path: cannot open file (reason)".
 std::string readFile(const std::string& path);
 
+/// `bytes` without a leading UTF-8 byte-order mark (text formats may start with one).
+std::string_view skipBom(std::string_view bytes);
+/// Coordinates beyond this magnitude are refused (Scene::finalize checks too): squared lengths
+/// and cross products of such values overflow. The loaders check each vertex as they read it,
+/// so the message names the file's line and the format's own vertex number.
+inline constexpr double kMaxCoordinate = 1e30;
+/// "a coordinate beyond 1e30 in magnitude" if `p` has one, else nullptr (p is finite).
+const char* hugeCoordinate(const dvec3& p);
+/// A number read from a file, for a message: an integer without decimals, else %g.
+std::string numberText(double v);
 /// Maps a colour channel in [0, 1] to 0..255 (clamped, NaN -> 0).
 uint8_t unitToByte(double v);
 /// Sets every face's colour to the mean of its vertices' colours (one per position).

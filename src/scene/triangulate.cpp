@@ -9,9 +9,10 @@
 namespace hsr {
 namespace {
 
-// Areas (as |cross product|, i.e. twice the area) at or below this fraction of the polygon's
-// squared size count as zero: well above double rounding of the cross products, far below any
-// sliver a model means to draw.
+// Areas (as |cross product|, i.e. twice the area) at or below this fraction of the squared size
+// count as zero: well above double rounding of the cross products, far below any sliver a model
+// means to draw. A polygon's size is its bounding box's diagonal; a triangle's (or a turn's) its
+// longest side, so that the small, well-shaped pieces of a polygon of many vertices count.
 constexpr double kZeroAreaRel = 1e-12;
 // A vertex farther than this fraction of the polygon's size from its Newell plane makes the
 // polygon non-planar.
@@ -116,7 +117,6 @@ PolygonReport Triangulator::run(const std::vector<dvec3>& positions, std::span<c
   // rejects self-intersecting polygons like a pentagram, whose turns all have the same sign.)
   // A straight vertex (no turn) would give the fan a zero-area triangle and leave that vertex
   // as a T-junction on a neighbouring triangle's edge, so such polygons are ear clipped too.
-  const double flatTolerance = kZeroAreaRel * size2_;
   bool convex = true, straight = false;
   int xChanges = 0, yChanges = 0, firstX = 0, firstY = 0, lastX = 0, lastY = 0;
   auto countChange = [](double component, int& first, int& last, int& changes) {
@@ -129,8 +129,9 @@ PolygonReport Triangulator::run(const std::vector<dvec3>& positions, std::span<c
   for (size_t i = 0; i < n && convex; ++i) {
     dvec2 edgeIn = flat_[i] - flat_[(i + n - 1) % n], edgeOut = flat_[(i + 1) % n] - flat_[i];
     double turn = cross2(edgeIn, edgeOut);
-    if (turn < -flatTolerance) convex = false;
-    straight = straight || turn <= flatTolerance;
+    const double tolerance = flatTolerance(uint32_t((i + n - 1) % n), uint32_t(i), uint32_t((i + 1) % n));
+    if (turn < -tolerance) convex = false;
+    straight = straight || turn <= tolerance;
     countChange(edgeOut.x, firstX, lastX, xChanges);
     countChange(edgeOut.y, firstY, lastY, yChanges);
   }
@@ -158,7 +159,8 @@ void Triangulator::emit(std::span<const uint32_t> poly, uint32_t a, uint32_t b, 
                         uint32_t face, std::vector<Triangle>& out) const {
   // Zero-area pieces (collinear or repeated vertices) are dropped; the test is in 3D, because
   // that is the triangle every algorithm will draw.
-  if (glm::length(glm::cross(local_[b] - local_[a], local_[c] - local_[a])) > kZeroAreaRel * size2_)
+  const dvec3 ab = local_[b] - local_[a], ac = local_[c] - local_[a], bc = ac - ab;
+  if (glm::length(glm::cross(ab, ac)) > kZeroAreaRel * std::max({length2(ab), length2(ac), length2(bc)}))
     out.push_back({{poly[a], poly[b], poly[c]}, face});
 }
 
@@ -168,6 +170,11 @@ void Triangulator::fan(std::span<const uint32_t> poly, uint32_t face, std::vecto
 
 double Triangulator::orient(uint32_t a, uint32_t b, uint32_t c) const {
   return cross2(flat_[b] - flat_[a], flat_[c] - flat_[a]);
+}
+
+double Triangulator::flatTolerance(uint32_t a, uint32_t b, uint32_t c) const {
+  const dvec2 ab = flat_[b] - flat_[a], bc = flat_[c] - flat_[b], ca = flat_[a] - flat_[c];
+  return kZeroAreaRel * std::max({glm::dot(ab, ab), glm::dot(bc, bc), glm::dot(ca, ca)});
 }
 
 // Ear clipping: repeatedly cut off a convex vertex whose triangle with its two neighbours
@@ -180,7 +187,8 @@ double Triangulator::orient(uint32_t a, uint32_t b, uint32_t c) const {
 // "tangled" and a convex vertex is cut after a few fruitless visits.
 void Triangulator::earClip(std::span<const uint32_t> poly, uint32_t face, std::vector<Triangle>& out) {
   const uint32_t n = uint32_t(poly.size());
-  const double flatTolerance = kZeroAreaRel * size2_;
+  // A strictly convex turn at k (not straight, not reflex).
+  auto convexAt = [&](uint32_t k) { return orient(prev_[k], k, next_[k]) > flatTolerance(prev_[k], k, next_[k]); };
   prev_.resize(n);
   next_.resize(n);
   alive_.assign(n, 1);
@@ -190,7 +198,7 @@ void Triangulator::earClip(std::span<const uint32_t> poly, uint32_t face, std::v
     prev_[i] = (i + n - 1) % n;
     next_[i] = (i + 1) % n;
   }
-  for (uint32_t i = 0; i < n; ++i) blocker_[i] = orient(prev_[i], i, next_[i]) <= flatTolerance;
+  for (uint32_t i = 0; i < n; ++i) blocker_[i] = !convexAt(i);
   buildBlockerGrid();
 
   auto unlink = [&](uint32_t i) {
@@ -201,7 +209,7 @@ void Triangulator::earClip(std::span<const uint32_t> poly, uint32_t face, std::v
     // Cutting an ear makes its neighbours more convex, but cutting a zero-width spike can
     // make one reflex: such vertices join the ear tests through lateBlockers_.
     for (uint32_t k : {a, c}) {
-      bool nowBlocker = orient(prev_[k], k, next_[k]) <= flatTolerance;
+      bool nowBlocker = !convexAt(k);
       if (nowBlocker && !blocker_[k]) lateBlockers_.push_back(k);
       blocker_[k] = nowBlocker;
     }
@@ -229,7 +237,7 @@ void Triangulator::earClip(std::span<const uint32_t> poly, uint32_t face, std::v
     if (workLeft_ > 0) --workLeft_;
     const uint32_t a = prev_[i], c = next_[i];
     const double o = orient(a, i, c);
-    if (std::abs(o) <= flatTolerance) {
+    if (std::abs(o) <= flatTolerance(a, i, c)) {
       // A repeated vertex or the tip of a zero-width spike adds no area: drop it. A straight
       // vertex is no ear; it waits until a neighbour's ear makes it convex.
       if (glm::dot(flat_[i] - flat_[a], flat_[c] - flat_[i]) <= 0) {
@@ -248,7 +256,7 @@ void Triangulator::earClip(std::span<const uint32_t> poly, uint32_t face, std::v
       // (or, if none is left, the current one) so that the loop makes progress.
       tangled_ = true;
       uint32_t v = firstConvexMiss != n ? firstConvexMiss : i;
-      cut(v, orient(prev_[v], v, next_[v]) > flatTolerance);
+      cut(v, convexAt(v));
       continue;
     }
     if (otherNeighbour != n && alive_[otherNeighbour]) {
@@ -258,7 +266,7 @@ void Triangulator::earClip(std::span<const uint32_t> poly, uint32_t face, std::v
     }
     otherNeighbour = n;
   }
-  if (orient(prev_[i], i, next_[i]) > flatTolerance) emit(poly, prev_[i], i, next_[i], face, out);
+  if (convexAt(i)) emit(poly, prev_[i], i, next_[i], face, out);
 }
 
 void Triangulator::buildBlockerGrid() {

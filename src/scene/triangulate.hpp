@@ -39,6 +39,9 @@ class Triangulator {
   void emit(std::span<const uint32_t> poly, uint32_t a, uint32_t b, uint32_t c, uint32_t face,
             std::vector<Triangle>& out) const;
   double orient(uint32_t a, uint32_t b, uint32_t c) const;
+  // The |orient| at or below which the turn a, b, c counts as straight: relative to the
+  // triangle's own longest side, so the fine turns of a polygon of many vertices still count.
+  double flatTolerance(uint32_t a, uint32_t b, uint32_t c) const;
   void buildBlockerGrid();
   glm::ivec2 cell(const dvec2& p) const;  // grid cell of a projected point (clamped)
 
