@@ -214,15 +214,16 @@ Json zfightClaim(const Json& results) {
   bool fights = false, mitigated = true;
   for (const Json& once : results["zfight"]) {
     if (once["format"] != "u16:z") continue;
+    const uint64_t a = once["fighting_pixels"];
+    fights |= a > 0;
+    measured += fmt::format("{}gap {:g}: {} px at once ({:.1f} ms)", measured.empty() ? "" : "; ", once["gap"].get<double>(), a,
+                            once["ms"].get<double>());
     for (const Json& parts : results["zfight"])
       if (parts["gap"] == once["gap"] && parts["depth_slices"].get<int>() > 1 &&
           parts["format"].get<std::string>().rfind("u16:z", 0) == 0) {
-        const uint64_t a = once["fighting_pixels"], b = parts["fighting_pixels"];
-        fights |= a > 0;
+        const uint64_t b = parts["fighting_pixels"];
         mitigated &= b <= a;
-        measured += fmt::format("{}gap {:g}: {} px at once ({:.1f} ms), {} px in {} parts ({:.1f} ms)",
-                                measured.empty() ? "" : "; ", once["gap"].get<double>(), a, once["ms"].get<double>(), b,
-                                parts["depth_slices"].get<int>(), parts["ms"].get<double>());
+        measured += fmt::format(", {} in {} parts ({:.1f} ms)", b, parts["depth_slices"].get<int>(), parts["ms"].get<double>());
       }
   }
   return claim(text, "KTH thesis", "u16:z, pixels showing the wrong surface: " + measured,

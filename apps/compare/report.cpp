@@ -5,6 +5,7 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -103,6 +104,39 @@ void writeResultsTable(std::ostream& o, const Json& results) {
         << "</td><td class=\"l " << checkClass(r["check"]) << "\">" << esc(r["check"]) << "</td></tr>\n";
     }
   o << "</table>\n";
+}
+
+// Each algorithm's own counters (Stats::details: Newell's tests by kind, the BSP tree's fragments,
+// the pyramid's levels, ...), one table per algorithm variant, a row per case.
+void writeDetails(std::ostream& o, const Json& results) {
+  o << "<h2 id=\"details\">Each algorithm's own counters</h2>\n<p>What each algorithm counts of its own work "
+       "(<code>docs/algorithms/NAME.md</code> says what each counter means).</p>\n";
+  std::vector<std::string> variants;
+  for (const Json& c : results["cases"])
+    for (const Json& r : c["runs"])
+      if (std::find(variants.begin(), variants.end(), r["variant"].get<std::string>()) == variants.end())
+        variants.push_back(r["variant"]);
+  for (const std::string& v : variants) {
+    std::vector<std::string> keys;  // the numeric counters, in the order the algorithm reports them
+    for (const Json& c : results["cases"])
+      for (const Json& r : c["runs"])
+        if (r["variant"] == v && r.contains("stats") && r["stats"].contains(r["algorithm"].get<std::string>()))
+          for (const auto& [key, value] : r["stats"][r["algorithm"].get<std::string>()].items())
+            if (value.is_number() && std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
+    if (keys.empty()) continue;
+    o << "<h3>" << esc(v) << "</h3>\n<table><tr><th class=l>scene</th><th>size</th>";
+    for (const std::string& k : keys) o << "<th>" << esc(k) << "</th>";
+    o << "</tr>\n";
+    for (const Json& c : results["cases"])
+      for (const Json& r : c["runs"]) {
+        if (r["variant"] != v || !r.contains("stats")) continue;
+        const Json& d = r["stats"].value(r["algorithm"].get<std::string>(), Json::object());
+        o << "<tr><td class=l>" << esc(c["scene"]) << "</td><td>" << c["width"] << "x" << c["height"] << "</td>";
+        for (const std::string& k : keys) o << "<td>" << (d.contains(k) ? num(d[k]) : "") << "</td>";
+        o << "</tr>\n";
+      }
+    o << "</table>\n";
+  }
 }
 
 void writePictures(std::ostream& o, const Json& results) {
@@ -250,11 +284,12 @@ void writeReport(const std::string& dir, const Json& results) {
   std::ostringstream o;
   writeHead(o, results);
   o << "<p><a href=\"#claims\">claims</a> · <a href=\"#charts-h\">charts</a> · <a href=\"#table\">every run</a> · "
-       "<a href=\"#pictures\">pictures</a> · <a href=\"#zfight\">z-fighting</a> · <a href=\"results.json\">results.json"
+       "<a href=\"#details\">counters</a> · <a href=\"#pictures\">pictures</a> · <a href=\"#zfight\">z-fighting</a> · <a href=\"results.json\">results.json"
        "</a></p>\n";
   writeClaims(o, results);
   o << "<h2 id=\"charts-h\">Charts</h2>\n<div id=\"charts\" class=\"charts\"></div>\n";
   writeResultsTable(o, results);
+  writeDetails(o, results);
   writePictures(o, results);
   writeZfight(o, results);
   std::string embedded = results.dump();
