@@ -312,9 +312,7 @@ struct ViewFlags {
   }
 };
 
-double millisecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
+using hsr::cli::millisecondsSince;
 
 // ---------------------------------------------------------------------------------------------
 // Subcommands. Each declares its flags on its CLI11 app, bound to state that the returned
@@ -518,11 +516,7 @@ struct BenchFlags {
   bool json = false, occlusion = false, orbit = false;
 };
 
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const size_t n = values.size();
-  return n == 0 ? 0 : n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
+using hsr::cli::median;
 
 // What a benchmark measured: whole frames, each frame's stages (Stats::time_ms), and the first
 // frame of the process apart (it builds what later frames reuse, such as a BSP tree).

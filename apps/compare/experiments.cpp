@@ -2,6 +2,8 @@
 // the buffers, and depth precision curves (study.hpp).
 #include "study.hpp"
 
+#include "../commands.hpp"
+
 #include <fmt/core.h>
 
 #include <algorithm>
@@ -44,7 +46,7 @@ Json zfightExperiment(const StudySettings& settings, bool quick) {
       if (z.slices > 1) options.params = {{"raster", "binned"}, {"depth-slices", std::to_string(z.slices)}};
       const auto start = std::chrono::steady_clock::now();
       const Frame frame = render(scene, camera, options);
-      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      const double ms = millisecondsSince(start);
       uint64_t fighting = 0;
       for (size_t i = 0; i < frame.faceId.size(); ++i) fighting += frame.faceId[i] != reference.faceId[i];
       const std::string label = z.slices > 1 ? fmt::format("{} in {} parts", z.format, z.slices) : z.format;

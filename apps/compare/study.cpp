@@ -1,6 +1,8 @@
 // The study's cases and runs (study.hpp): render, time, count, verify against raycast, picture.
 #include "study.hpp"
 
+#include "../commands.hpp"
+
 #include <fmt/core.h>
 
 #include <algorithm>
@@ -13,16 +15,6 @@ namespace {
 
 constexpr double kSlowFrameMs = 2000;           // a run whose first frame is slower times that frame only
 constexpr int kMaxPicturePixels = 800 * 600;     // cases this small get pictures
-
-double msSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
-
-double medianOf(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n == 0 ? 0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 std::string fileSafe(const std::string& text) {
   std::string out;
@@ -155,7 +147,7 @@ Json timedRun(const RunContext& ctx, const RenderOptions& options, Frame& frame)
   for (int i = 0; i < ctx.settings.frames; ++i) {
     const auto start = std::chrono::steady_clock::now();
     render(ctx.scene, ctx.camera, options, frame);
-    ms.push_back(msSince(start));
+    ms.push_back(millisecondsSince(start));
     for (const auto& [stage, t] : frame.stats.time_ms) {
       if (!stages.count(stage)) stageOrder.push_back(stage);
       stages[stage].push_back(t);
@@ -166,8 +158,8 @@ Json timedRun(const RunContext& ctx, const RenderOptions& options, Frame& frame)
     if (i == 0 && ms[0] > kSlowFrameMs && !built) break;
   }
   Json stageJson = Json::object();
-  for (const std::string& s : stageOrder) stageJson[s] = medianOf(stages[s]);
-  return {{"frames", ms.size()}, {"median_ms", medianOf(ms)}, {"min_ms", *std::min_element(ms.begin(), ms.end())},
+  for (const std::string& s : stageOrder) stageJson[s] = median(stages[s]);
+  return {{"frames", ms.size()}, {"median_ms", median(ms)}, {"min_ms", *std::min_element(ms.begin(), ms.end())},
           {"first_ms", ms.front()}, {"stages_ms", stageJson}};
 }
 
@@ -239,7 +231,7 @@ Json runCase(const StudyCase& c, const std::vector<Variant>& variants, const Stu
   refOptions.threads = settings.threads;
   const auto refStart = std::chrono::steady_clock::now();
   const Frame reference = render(scene, camera, refOptions);
-  const double refMs = msSince(refStart);
+  const double refMs = millisecondsSince(refStart);
 
   Json out = {{"id", c.id},          {"group", c.group},        {"scene", c.scene},
               {"width", c.width},    {"height", c.height},      {"faces", scene.faceCount()},
