@@ -1,5 +1,5 @@
-// The `hsr` command line: a table of subcommands (render, bench, algorithms, scenes, info, help),
-// each its own function with its own flags and help; docs/cli.md documents them. Used by people
+// The `hsr` command line: a table of subcommands (render, bench, compare, precision, algorithms, scenes, info, help),
+// each with its own flags and help (compare and precision in their own files); docs/cli.md documents them. Used by people
 // and by the scripts that compare hsr with other renderers, so flags, output files and exit
 // status follow docs/conventions.md "Command line": 0 success, 2 bad usage or input, 1 otherwise.
 #include <hsr/hsr.hpp>

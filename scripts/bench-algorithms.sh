@@ -2,7 +2,7 @@
 # The algorithms side by side on built-in scenes: per scene and algorithm, the median frame time
 # (hsr bench) and the counts of one verified frame (hsr render --verify): colour writes, covered
 # pixels, overdraw, z comparisons and wrong pixels against the exact reference. Prints a Markdown
-# table. (hsr compare will replace it.)
+# table: a quick side-by-side on chosen scenes (hsr compare runs the whole study).
 # Usage: scripts/bench-algorithms.sh [SIZE, default 1920x1080] [FRAMES, default 5] [THREADS, default 2]
 #        environment: SCENES (space-separated), ALGORITHMS (space-separated NAME[:key=value,...])
 set -euo pipefail
