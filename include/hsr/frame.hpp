@@ -91,7 +91,10 @@ struct Stats {
   uint64_t depth_writes = 0;
   uint64_t color_writes = 0;
   uint64_t covered_pixels = 0;     // pixels showing a surface in the final image
-  uint64_t memory_bytes = 0;       // all per-frame buffers and structures
+  uint64_t memory_bytes = 0;       // all per-frame buffers and structures: the sum of `memory`
+  /// The bytes of each buffer or structure the frame used, by name ("depth_buffer", "frame.color",
+  /// "bsp_tree"; docs/memory.md lists them), in the order first added (JSON "memory").
+  std::vector<std::pair<std::string_view, uint64_t>> memory;
   std::string depth_format;        // e.g. "f32:reversed" (empty for algorithms without one)
   std::vector<std::pair<std::string, double>> time_ms;  // stage -> ms, in pipeline order
   std::optional<uint64_t> wrong_pixels, ambiguous_pixels;  // with --verify
@@ -105,6 +108,11 @@ struct Stats {
 
   double overdraw() const { return covered_pixels ? double(color_writes) / double(covered_pixels) : 0.0; }
   void addTime(const std::string& stage, double ms);
+  /// Adds `bytes` to buffer `name`'s entry of `memory` (a string literal) and to memory_bytes.
+  void addMemory(std::string_view name, uint64_t bytes);
+  /// Adds the counters of `part` (a part of this frame drawn on its own: a depth slice, a region)
+  /// to these: front-end counts, culls, tests and writes, and its times stage by stage.
+  void addCounts(const Stats& part);
   /// Sets the detail `key` (replacing its value); addDetail adds to a count (0 if absent).
   void setDetail(std::string_view key, Detail value);
   void addDetail(std::string_view key, uint64_t count);

@@ -73,6 +73,13 @@ struct SceneProblems {
   std::vector<std::string> notes;  // first few human-readable notes ("face 12: degenerate")
 };
 
+/// A light for shadows (docs/shadows.md): a sun, by the direction its light travels, or a point.
+struct Light {
+  enum class Kind : uint8_t { Directional, Point };
+  Kind kind = Kind::Directional;
+  dvec3 vector{0, 0, 0};  // Directional: the direction the light travels (not zero); Point: its position
+};
+
 struct Scene {
   std::string source;  // file name or "builtin:NAME"; used in error messages
 
@@ -98,6 +105,7 @@ struct Scene {
   bool meshVerticesApart = false;
 
   std::optional<CameraSpec> camera;  // a camera stored in the scene file, if any
+  std::optional<Light> light;        // a light stored in the scene file, if any
 
   size_t faceCount() const { return polygonOffsets.size() - 1; }
   std::span<const uint32_t> face(size_t f) const {

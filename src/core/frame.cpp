@@ -44,6 +44,28 @@ void Stats::addTime(const std::string& stage, double ms) {
   time_ms.emplace_back(stage, ms);
 }
 
+void Stats::addMemory(std::string_view name, uint64_t bytes) {
+  memory_bytes += bytes;
+  for (auto& [k, v] : memory)
+    if (k == name) {
+      v += bytes;
+      return;
+    }
+  memory.emplace_back(name, bytes);
+}
+
+void Stats::addCounts(const Stats& part) {
+  triangles_clipped += part.triangles_clipped;
+  triangles_degenerate += part.triangles_degenerate;
+  culled_backface += part.culled_backface;
+  culled_frustum += part.culled_frustum;
+  culled_occlusion += part.culled_occlusion;
+  depth_tests += part.depth_tests;
+  depth_writes += part.depth_writes;
+  color_writes += part.color_writes;
+  for (const auto& [stage, ms] : part.time_ms) addTime(stage, ms);
+}
+
 void Stats::setDetail(std::string_view key, Detail value) {
   for (auto& [k, v] : details)
     if (k == key) {
@@ -88,6 +110,9 @@ std::string Stats::toJson(int indent) const {
   j["covered_pixels"] = covered_pixels;
   j["overdraw"] = overdraw();
   j["memory_bytes"] = memory_bytes;
+  nlohmann::ordered_json m = nlohmann::ordered_json::object();
+  for (const auto& [k, v] : memory) m[std::string(k)] = v;
+  j["memory"] = m;
   nlohmann::ordered_json t = nlohmann::ordered_json::object();
   for (auto& [k, v] : time_ms) t[k] = v;
   j["time_ms"] = t;

@@ -16,10 +16,13 @@ void algo::beginStats(Stats& st, const Scene& scene, const Camera& camera) {
   auto times = std::move(st.time_ms);
   auto params = std::move(st.params);
   auto details = std::move(st.details);
+  auto memory = std::move(st.memory);
   st = Stats{};
   st.time_ms = std::move(times);
   st.params = std::move(params);
   st.details = std::move(details);
+  st.memory = std::move(memory);
+  st.memory.clear();
   st.time_ms.clear();
   st.params.clear();
   st.details.clear();
