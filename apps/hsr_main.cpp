@@ -740,7 +740,8 @@ Json algorithmsJson() {
     for (const hsr::ParamSpec& p : a.params) {
       Json entry = {{"name", p.name}, {"type", hsr::paramTypeName(p.type)}, {"default", p.defaultValue}};
       if (p.type == hsr::ParamType::Choice) entry["values"] = p.choices;
-      if (p.type == hsr::ParamType::Int || p.type == hsr::ParamType::Real) entry["range"] = {p.min, p.max};
+      if (p.type == hsr::ParamType::Int || p.type == hsr::ParamType::Real || p.type == hsr::ParamType::Size)
+        entry["range"] = {p.min, p.max};
       entry["help"] = p.help;
       params.push_back(entry);
     }
@@ -782,7 +783,9 @@ void printAlgorithms() {
     for (const hsr::ParamSpec& p : a.params) {
       std::string values = p.type == hsr::ParamType::Choice ? fmt::format("{}", fmt::join(p.choices, "|"))
                            : p.type == hsr::ParamType::Bool ? "on|off"
-                                                            : fmt::format("{} in [{}, {}]", hsr::paramTypeName(p.type), p.min, p.max);
+                           : p.type == hsr::ParamType::Size
+                               ? fmt::format("WxH|full (each in [{}, {}])", p.min, p.max)
+                               : fmt::format("{} in [{}, {}]", hsr::paramTypeName(p.type), p.min, p.max);
       fmt::print("  --param {}={}  (default {})\n{}", p.name, values, p.defaultValue, wrapped(p.help, "      "));
     }
     fmt::print("\n");

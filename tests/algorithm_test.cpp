@@ -15,7 +15,7 @@ TEST(Algorithms, RegistryDeclaresZBufferAndRaycast) {
   ASSERT_NE(z, nullptr);
   ASSERT_NE(r, nullptr);
   EXPECT_EQ(z->guarantee.kind, Guarantee::Kind::Exact);
-  ASSERT_EQ(z->params.size(), 3u);
+  ASSERT_EQ(z->params.size(), 6u);
   EXPECT_EQ(z->params[0].name, "raster");
   EXPECT_EQ(z->params[0].defaultValue, "tiled");
   EXPECT_EQ(z->params[0].choices, (std::vector<std::string>{"tiled", "halfspace", "scanline", "binned"}));
@@ -24,6 +24,12 @@ TEST(Algorithms, RegistryDeclaresZBufferAndRaycast) {
   EXPECT_EQ(z->params[2].name, "occlusion-cull");
   EXPECT_EQ(z->params[2].type, ParamType::Bool);
   EXPECT_EQ(z->params[2].defaultValue, "off");
+  EXPECT_EQ(z->params[3].name, "region");
+  EXPECT_EQ(z->params[3].type, ParamType::Size);
+  EXPECT_EQ(z->params[3].defaultValue, "full");
+  EXPECT_EQ(z->params[4].name, "sort-key");
+  EXPECT_EQ(z->params[5].name, "clear");
+  EXPECT_EQ(z->params[5].choices, (std::vector<std::string>{"every-frame", "half-range"}));
   EXPECT_TRUE(r->params.empty());
   for (const AlgorithmInfo& a : algorithms()) {
     EXPECT_FALSE(a.summary.empty()) << a.name;

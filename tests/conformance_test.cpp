@@ -69,6 +69,18 @@ TEST(Conformance, TheZbufferDrawnInDepthSlicesIsExact) {
   }
 }
 
+// The image drawn region by region (a size parameter, not varied by variantsOf): exact at region
+// sizes that do and do not divide the conformance suite's odd image sizes.
+TEST(Conformance, TheZbufferDrawnRegionByRegionIsExact) {
+  const conformance::Plan plan = conformance::fullPlan();
+  for (const char* region : {"1x1", "7x5", "64x64", "1000x3"}) {
+    const conformance::Variant variant{findAlgorithm("zbuffer"), {{"region", region}}};
+    const std::vector<std::string> failures = conformance::check(variant, plan);
+    for (size_t i = 0; i < std::min<size_t>(failures.size(), 5); ++i) ADD_FAILURE() << failures[i];
+    EXPECT_TRUE(failures.empty()) << variant.describe() << ": " << failures.size() << " violations";
+  }
+}
+
 // Drawing the range in parts removes the z-fighting of a 16-bit z-buffer (KTH thesis).
 TEST(Conformance, DepthSlicesRemoveZFighting) {
   const Scene scene = loadScene("builtin:zfight");

@@ -24,6 +24,7 @@ enum class ParamType : uint8_t {
   Int,     // a whole number in [min, max]
   Real,    // a finite number in [min, max]
   Bool,    // on|off (also true|false, 1|0)
+  Size,    // WxH, each a whole number in [min, max], or "full" (the whole image)
 };
 
 /// One parameter of an algorithm.
@@ -70,6 +71,8 @@ class AlgorithmParams {
   int64_t integer(const std::string& name) const;
   double real(const std::string& name) const;
   bool flag(const std::string& name) const;
+  /// A Size parameter as (width, height); (0, 0) for "full".
+  std::pair<int64_t, int64_t> size(const std::string& name) const;
   /// (name, value) in declaration order: what the statistics record as "params".
   const std::vector<std::pair<std::string, std::string>>& entries() const { return entries_; }
 
@@ -112,7 +115,7 @@ void registerAlgorithm(AlgorithmInfo info);
 /// Checks `given` (parameter name -> text) against the algorithm's declaration and fills in the
 /// defaults. Throws InputError "--param NAME=VALUE: ..." for an unknown name or a bad value.
 AlgorithmParams resolveParams(const AlgorithmInfo& algorithm, const std::map<std::string, std::string>& given);
-/// "choice", "int", "real", "bool".
+/// "choice", "int", "real", "bool", "size".
 const char* paramTypeName(ParamType type);
 
 }  // namespace hsr

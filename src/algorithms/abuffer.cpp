@@ -190,8 +190,10 @@ void abufferFrame(const Scene& scene, const Camera& camera, const RenderOptions&
   st.color_writes = st.covered_pixels;
   st.setDetail("fragments", fragments);
   st.setDetail("deepest_pixel", deepest);
-  const uint64_t pixels = uint64_t(camera.width) * uint64_t(camera.height);
-  st.memory_bytes = bvh.memoryBytes() + pixels * (2 * sizeof(int32_t) + sizeof(float) + sizeof(Rgba8));
+  st.addMemory("bvh", bvh.memoryBytes());
+  // One pixel's fragments at a time per thread: a list as long as the deepest pixel's, at most.
+  st.addMemory("pixel_fragments", deepest * sizeof(RayHit) * uint64_t(resolveThreads(options.threads)));
+  addFrameMemory(st, frame);
 }
 
 

@@ -75,11 +75,18 @@ std::vector<std::string> listPriorityFailureScenes(const std::string& key);
 /// their triangles drawn with a depth test at every pixel).
 void zbufferOcclusionCulled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
 
+/// The textbook z-buffer region by region with a z-buffer of one region's size (region=WxH), and
+/// with half the depth range per frame instead of a clear (clear=half-range): zbuffer_memory.cpp.
+void zbufferInRegions(const Scene& scene, const Camera& camera, const RenderOptions& options, int regionWidth,
+                      int regionHeight, Frame& frame);
+void zbufferHalfRange(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
+
 /// The production z-buffer: binned, tiled, SIMD, multithreaded (zbuffer_tiled.cpp).
 void zbufferTiled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
 
-/// Bytes of the frame's sized buffers (part of every algorithm's memory_bytes).
-uint64_t frameBytes(const Frame& frame);
+/// Adds the frame's sized buffers to st.memory ("frame.depth", "frame.color", ...): part of every
+/// algorithm's memory.
+void addFrameMemory(Stats& st, const Frame& frame);
 
 /// Starts a frame's statistics: image size, faces and triangles of the scene, all else zero
 /// (render.cpp; render() starts every frame's statistics so, as does the occlusion buffer).

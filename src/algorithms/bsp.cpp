@@ -412,9 +412,10 @@ void drawInBspOrder(const Scene& scene, const Camera& camera, const RenderOption
   st.setDetail("depth", uint64_t(tree.depth()));
   st.setDetail("built", uint64_t(built ? 1 : 0));
   if (built) st.setDetail("build_ms", buildMs);
-  st.memory_bytes += tree.nodes().size() * sizeof(BspTree::Node) +
-                     tree.fragments().size() * sizeof(BspTree::Fragment) + tree.vertices().size() * sizeof(dvec3) +
-                     rank.size() * 2 * sizeof(uint32_t);
+  st.addMemory("bsp_tree", tree.nodes().size() * sizeof(BspTree::Node) +
+                               tree.fragments().size() * sizeof(BspTree::Fragment) +
+                               tree.vertices().size() * sizeof(dvec3));
+  st.addMemory("bsp_order", rank.size() * 2 * sizeof(uint32_t));
 }
 
 void bspPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out) {

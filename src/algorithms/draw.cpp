@@ -57,9 +57,11 @@ class FragmentWriter {
     else winner_.clear();
   }
 
-  uint64_t bytes() const {
-    return depth_.size() * sizeof(T) + winner_.size() * sizeof(uint32_t) + colors_.size() * sizeof(Rgba8) +
-           nearest_.size() * sizeof(double);
+  void addMemory(Stats& st) const {
+    st.addMemory("depth_buffer", depth_.size() * sizeof(T));
+    st.addMemory("winner_ids", winner_.size() * sizeof(uint32_t));
+    st.addMemory("triangle_colors", colors_.size() * sizeof(Rgba8));
+    st.addMemory("nearest_depths", nearest_.size() * sizeof(double));
   }
 
   // Every triangle's shaded colour, once (on the pool), for resolving: far fewer triangles than
@@ -192,7 +194,7 @@ std::vector<std::vector<uint32_t>> binTriangles(std::span<const SetupTriangle> t
 // The frame drawn and resolved by one writer: on one thread over the whole image, or binned,
 // tile by tile on the pool (each tile's pixels are its own; counters summed in tile order).
 template <WriteRule R, DepthStorage S, DepthMapping M>
-uint64_t drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const Camera& cam, const RenderOptions& opt,
+void drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const Camera& cam, const RenderOptions& opt,
                   const TriangleShader& shade, Frame& frame, DrawCounters& counters, const DerivedScene* derived) {
   FragmentWriter<R, S, M> writer(tris, cam, opt, shade, frame, derived);
   const int threads = resolveThreads(opt.threads);
@@ -209,7 +211,8 @@ uint64_t drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const 
     }
     writer.shadeTriangles(1);
     writer.resolveRows(0, cam.height, counters);
-    return writer.bytes();
+    writer.addMemory(frame.stats);
+    return;
   }
   const int tilesX = (cam.width + kBinTile - 1) / kBinTile, tilesY = (cam.height + kBinTile - 1) / kBinTile;
   const std::vector<std::vector<uint32_t>> bins = binTriangles(tris, tilesX, tilesY);
@@ -231,9 +234,10 @@ uint64_t drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const 
   parallelFor(0, size_t(cam.height), threads, [&](size_t y) { writer.resolveRows(int(y), int(y) + 1, perRow[y]); });
   for (const DrawCounters& c : perTile) counters.add(c);
   for (const DrawCounters& c : perRow) counters.add(c);
-  uint64_t binBytes = 0;
+  uint64_t binBytes = bins.capacity() * sizeof(bins[0]);
   for (const auto& b : bins) binBytes += b.capacity() * sizeof(uint32_t);
-  return writer.bytes() + binBytes;
+  writer.addMemory(frame.stats);
+  frame.stats.addMemory("bins", binBytes);
 }
 
 }  // namespace
@@ -269,20 +273,18 @@ DrawRaster drawRasterOf(const AlgorithmParams& params) {
   return name == "scanline" ? DrawRaster::Scanline : name == "binned" ? DrawRaster::Binned : DrawRaster::HalfSpace;
 }
 
-uint64_t drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawRaster raster, const Camera& camera,
-                     const RenderOptions& options, const TriangleShader& shade, Frame& frame, DrawCounters& counters,
-                     const DerivedScene* derived) {
+void drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawRaster raster, const Camera& camera,
+                 const RenderOptions& options, const TriangleShader& shade, Frame& frame, DrawCounters& counters,
+                 const DerivedScene* derived) {
   frame.clear(options.background, resolveThreads(options.threads));
   auto withRule = [&]<WriteRule R>() {
-    uint64_t bytes = 0;
     if constexpr (R == WriteRule::DepthTest || R == WriteRule::DepthTestBlend)
       visitDepthFormat(options.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
-        bytes = drawWith<R, S, M>(triangles, raster, camera, options, shade, frame, counters, derived);
+        drawWith<R, S, M>(triangles, raster, camera, options, shade, frame, counters, derived);
       });
     else  // no depth buffer: one instance
-      bytes = drawWith<R, DepthStorage::F32, DepthMapping::Reversed>(triangles, raster, camera, options, shade, frame,
-                                                                     counters, derived);
-    return bytes;
+      drawWith<R, DepthStorage::F32, DepthMapping::Reversed>(triangles, raster, camera, options, shade, frame,
+                                                             counters, derived);
   };
   switch (rule) {
     case WriteRule::DepthTest: return withRule.template operator()<WriteRule::DepthTest>();
@@ -291,7 +293,6 @@ uint64_t drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, D
     case WriteRule::Blend: return withRule.template operator()<WriteRule::Blend>();
     case WriteRule::DepthTestBlend: return withRule.template operator()<WriteRule::DepthTestBlend>();
   }
-  return 0;
 }
 
 void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& options, WriteRule rule,
@@ -308,7 +309,7 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
     st.addTime("order", timer.lap());
   }
   DrawCounters n;
-  const uint64_t bufferBytes = drawOrdered(triangles, rule, raster, camera, options, shade, frame, n, derived);
+  drawOrdered(triangles, rule, raster, camera, options, shade, frame, n, derived);
   st.addTime("raster", timer.lap());
 
   if (rule == WriteRule::DepthTest || rule == WriteRule::DepthTestBlend) st.depth_format = options.depthFormat.name();
@@ -320,7 +321,9 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
   st.depth_writes = n.depthWrites;
   st.color_writes = n.colorWrites;
   st.covered_pixels = n.covered;
-  st.memory_bytes = bufferBytes + triangles.capacity() * sizeof(SetupTriangle) + fe.memoryBytes() + frameBytes(frame);
+  st.addMemory("setup_triangles", triangles.capacity() * sizeof(SetupTriangle));
+  st.addMemory("front_end", fe.memoryBytes());
+  addFrameMemory(st, frame);
   st.setDetail("rasterizer", drawRasterName(raster));
   st.setDetail("write_rule", writeRuleName(rule));
   if (rule == WriteRule::WhereUnwritten) st.setDetail("skipped_full", n.skippedFull);

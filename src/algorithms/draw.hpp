@@ -70,10 +70,10 @@ struct DerivedScene {
 /// Draws `triangles` in their order into `frame` (sized by render(); cleared here) under `rule`
 /// and adds to `counters`; Frame::writes, when sized, gets each pixel's written fragments. With
 /// `derived`, the triangles are its scene's, and ids and colours are mapped back (DerivedScene).
-/// Returns the bytes of the buffers it used.
-uint64_t drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawRaster raster, const Camera& camera,
-                     const RenderOptions& options, const TriangleShader& shade, Frame& frame, DrawCounters& counters,
-                     const DerivedScene* derived = nullptr);
+/// Adds the buffers it used to frame.stats.memory.
+void drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawRaster raster, const Camera& camera,
+                 const RenderOptions& options, const TriangleShader& shade, Frame& frame, DrawCounters& counters,
+                 const DerivedScene* derived = nullptr);
 
 /// Puts the set-up triangles (submission order on entry) into drawing order.
 using OrderFn = std::function<void(std::vector<SetupTriangle>& triangles)>;

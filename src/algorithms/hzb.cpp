@@ -148,7 +148,10 @@ class HierarchicalZBuffer {
   const std::array<LevelCounts, kMaxLevels>& counts() const { return counts_; }
   int levels() const { return pyramid_.levels(); }
   uint64_t trianglesRejected() const { return hidden_; }
-  uint64_t bytes() const { return pixels_.bytes() + pyramid_.bytes(); }
+  void addMemory(Stats& st) const {
+    pixels_.addMemory(st);
+    st.addMemory("z_pyramid", pyramid_.bytes());
+  }
 
  private:
   bool hiddenIn(int k, int x, int y, const Rect& box, double nearest) const {
@@ -400,7 +403,8 @@ void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& op
     }
     hz.resolve(shade, n);
     st.addTime("raster", timer.lap());
-    recordZBufferStats(st, counters, frontEndBytes, triangles, n, hz.bytes(), options, frame);
+    recordZBufferStats(st, counters, frontEndBytes, triangles, n, options, frame);
+    hz.addMemory(st);
     if (!testTriangles) return;
     st.setDetail("levels", uint64_t(hz.levels()));
     st.setDetail("triangles_drawn", uint64_t(triangles.size()));

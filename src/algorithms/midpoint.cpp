@@ -84,7 +84,10 @@ class MidpointZBuffer {
   }
   void resolve(const TriangleShader& shade, DrawCounters& n) { pixels_.resolve(tris_, shade, n); }
   const MidpointCounts& counts() const { return counts_; }
-  uint64_t bytes() const { return pixels_.bytes() + stack_.capacity() * sizeof(Part); }
+  void addMemory(Stats& st) const {
+    pixels_.addMemory(st);
+    st.addMemory("midpoint_parts", stack_.capacity() * sizeof(Part));
+  }
 
  private:
   enum class Verdict { Behind, InFront, Mixed, Untested };
@@ -258,7 +261,8 @@ void midpoint(const Scene& scene, const Camera& camera, const RenderOptions& opt
     st.addTime("raster", timer.lap());
     const MidpointCounts& c = mz.counts();
     n.depthTests = c.pointComparisons + c.pixelTests;  // the paper's z comparisons
-    recordZBufferStats(st, fe, fe.memoryBytes(), triangles, n, mz.bytes(), options, frame);
+    recordZBufferStats(st, fe, fe.memoryBytes(), triangles, n, options, frame);
+    mz.addMemory(st);
     st.setDetail("point_comparisons", c.pointComparisons);
     st.setDetail("pixel_tests", c.pixelTests);
     st.setDetail("parts_tested", c.parts);

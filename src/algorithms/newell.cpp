@@ -477,9 +477,9 @@ void newell(const Scene& scene, const Camera& camera, const RenderOptions& optio
   st.addTime("fragments", deriveMs);
   setCounts(st, sorter.counts, polygons.size());
   st.setDetail("object_ms", sortMs + deriveMs);
-  st.memory_bytes += pool.capacity() * sizeof(dvec3) + polygons.capacity() * sizeof(PolygonRef) +
-                     derived.scene.positions.capacity() * sizeof(dvec3) +
-                     derived.scene.triangles.capacity() * sizeof(Triangle);
+  st.addMemory("newell_polygons", pool.capacity() * sizeof(dvec3) + polygons.capacity() * sizeof(PolygonRef));
+  st.addMemory("newell_fragments",
+               derived.scene.positions.capacity() * sizeof(dvec3) + derived.scene.triangles.capacity() * sizeof(Triangle));
 }
 
 }  // namespace

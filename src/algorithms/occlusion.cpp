@@ -157,13 +157,7 @@ void addPassStats(Stats& st, const algo::TiledState& pass, const tiled::RasterCo
   thread_local Stats part;  // (kept: its details' storage is reused from pass to pass)
   part.details.clear();
   algo::tiledStats(part, pass.fe, &pass.bins, counters);
-  st.triangles_clipped += part.triangles_clipped;
-  st.triangles_degenerate += part.triangles_degenerate;
-  st.culled_backface += part.culled_backface;
-  st.culled_frustum += part.culled_frustum;
-  st.culled_occlusion += part.culled_occlusion;
-  st.depth_tests += part.depth_tests;
-  st.depth_writes += part.depth_writes;
+  st.addCounts(part);
   for (const char* key : {"triangles_deferred", "clusters_deferred", "triangles_set_up_late"})
     if (const auto count = part.detailCount(key)) st.addDetail(key, *count);
 }
@@ -425,7 +419,7 @@ const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, c
 
   st.algorithm = "occlusion";
   st.depth_format = opt.depthFormat.name();
-  st.memory_bytes = im.memoryBytes();
+  st.addMemory("occlusion_buffer", im.memoryBytes());
   st.addTime("total", total.ms());
   im.width = camera.width;
   im.height = camera.height;

@@ -57,8 +57,8 @@ void raycast(const Scene& scene, const Camera& camera, const RenderOptions& opti
     st.covered_pixels += row.covered;
   }
   st.color_writes = st.covered_pixels;  // each covered pixel is written once
-  const uint64_t pixels = uint64_t(camera.width) * uint64_t(camera.height);
-  st.memory_bytes = bvh.memoryBytes() + pixels * (2 * sizeof(int32_t) + sizeof(float) + sizeof(Rgba8));
+  st.addMemory("bvh", bvh.memoryBytes());
+  addFrameMemory(st, frame);
 }
 
 }  // namespace

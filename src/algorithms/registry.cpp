@@ -76,6 +76,17 @@ std::string checkedValue(const AlgorithmInfo& algorithm, const ParamSpec& p, con
       if (v < p.min || v > p.max) return fail("out of range (" + fmtNumber(p.min) + " to " + fmtNumber(p.max) + ")");
       return value;
     }
+    case ParamType::Size: {
+      if (value == "full") return value;
+      const size_t x = value.find('x');
+      double w = 0, h = 0;
+      if (x == std::string::npos || !parseNumber(value.substr(0, x), w) || !parseNumber(value.substr(x + 1), h) ||
+          w != std::floor(w) || h != std::floor(h))
+        return fail("expected WIDTHxHEIGHT in whole pixels (e.g. 256x128) or full");
+      if (w < p.min || w > p.max || h < p.min || h > p.max)
+        return fail("out of range (each " + fmtNumber(p.min) + " to " + fmtNumber(p.max) + ")");
+      return value;
+    }
   }
   throw std::logic_error("checkedValue: unknown parameter type");
 }
@@ -105,6 +116,7 @@ const char* paramTypeName(ParamType type) {
     case ParamType::Int: return "int";
     case ParamType::Real: return "real";
     case ParamType::Bool: return "bool";
+    case ParamType::Size: return "size";
   }
   return "?";
 }
@@ -132,6 +144,12 @@ const std::string& AlgorithmParams::text(const std::string& name) const {
 int64_t AlgorithmParams::integer(const std::string& name) const { return int64_t(std::stod(text(name))); }
 double AlgorithmParams::real(const std::string& name) const { return std::stod(text(name)); }
 bool AlgorithmParams::flag(const std::string& name) const { return text(name) == "on"; }
+std::pair<int64_t, int64_t> AlgorithmParams::size(const std::string& name) const {
+  const std::string& value = text(name);
+  if (value == "full") return {0, 0};
+  const size_t x = value.find('x');
+  return {int64_t(std::stod(value.substr(0, x))), int64_t(std::stod(value.substr(x + 1)))};
+}
 
 const std::vector<AlgorithmInfo>& algorithms() { return registry(); }
 

@@ -15,6 +15,8 @@
 // mitigation of z-fighting: the depth range drawn in parts, each with the buffer's full precision.
 // `occlusion-cull=on` drops whole meshes hidden behind what is drawn before setting them up,
 // testing them against a z-pyramid kept over the textbook z-buffer (hzb.cpp: zbufferOcclusionCulled).
+// `region=WxH` and `clear=half-range` are the paper's memory and clearing savers
+// (zbuffer_memory.cpp).
 #include "algorithms/algorithms.hpp"
 #include "algorithms/draw.hpp"
 #include "algorithms/sort_keys.hpp"
@@ -24,19 +26,6 @@
 
 namespace hsr::algo {
 namespace {
-
-// The statistics of a frame drawn in parts: the counters of every part added up.
-void addPartStats(const Stats& part, Stats& total) {
-  total.triangles_clipped += part.triangles_clipped;
-  total.triangles_degenerate += part.triangles_degenerate;
-  total.culled_backface += part.culled_backface;
-  total.culled_frustum += part.culled_frustum;
-  total.depth_tests += part.depth_tests;
-  total.depth_writes += part.depth_writes;
-  total.color_writes += part.color_writes;
-  total.memory_bytes = std::max(total.memory_bytes, part.memory_bytes);
-  for (const auto& [stage, ms] : part.time_ms) total.addTime(stage, ms);
-}
 
 // A nearer slice's pixels replace the farther slices' under them.
 void mergeNearer(const Frame& part, Frame& frame) {
@@ -76,34 +65,54 @@ void zbufferInSlices(const Scene& scene, const Camera& camera, const RenderOptio
       total = frame.stats;
       continue;
     }
-    addPartStats(part.stats, total);
+    total.addCounts(part.stats);  // (its buffers are the farthest part's, reused)
     mergeNearer(part, frame);
   }
   total.covered_pixels = 0;
   for (float d : frame.depth) total.covered_pixels += std::isfinite(d);
-  total.memory_bytes += frame.depth.size() * (sizeof(float) + 2 * sizeof(int32_t) + sizeof(Rgba8));  // the part frame
+  Stats partFrame;
+  addFrameMemory(partFrame, part);
+  total.addMemory("slice_frame", partFrame.memory_bytes);
   frame.stats = std::move(total);
   frame.stats.setDetail("depth_slices", uint64_t(slices));
 }
 
-// Opaque faces first in submission order, then the transparent ones back to front by their
-// centroids, depth-tested without depth writes (the tiled rasterizer's kernel has no such pass:
+// Opaque faces first in submission order, then the transparent ones back to front by `key`
+// (sort-key), depth-tested without depth writes (the tiled rasterizer's kernel has no such pass:
 // its transparent frames are drawn by the service's binned rasterizer).
 void zbufferWithTransparency(const Scene& scene, const Camera& camera, const RenderOptions& options,
-                             const std::string& raster, Frame& frame) {
+                             const std::string& raster, SortKey key, Frame& frame) {
   std::vector<uint32_t> submission(scene.faceCount());
   for (uint32_t f = 0; f < submission.size(); ++f) submission[f] = f;
   const DrawRaster r = raster == "scanline"                      ? DrawRaster::Scanline
                        : raster == "tiled" || raster == "binned" ? DrawRaster::Binned
                                                                  : DrawRaster::HalfSpace;
   drawScene(scene, camera, options, WriteRule::DepthTestBlend, r,
-            byFaceRank(transparentLast(scene, camera, submission, SortKey::Centroid)), frame);
+            byFaceRank(transparentLast(scene, camera, submission, key)), frame);
+}
+
+// region=WxH or clear=half-range: the textbook loop on the half-space rasterizer, alone.
+void zbufferSaving(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
+                   Frame& frame) {
+  const auto [rw, rh] = params.size("region");
+  const bool halfRange = params.text("clear") == "half-range";
+  const char* what = halfRange ? "--param clear=half-range" : "--param region";
+  if (halfRange && rw > 0) throw InputError("--param clear=half-range: keeps one whole-image buffer; drop --param region");
+  if (params.integer("depth-slices") > 1 || params.flag("occlusion-cull"))
+    throw InputError(std::string(what) + ": not with depth-slices or occlusion-cull (drop those)");
+  if (params.text("raster") == "scanline")
+    throw InputError(std::string(what) + ": draws on the half-space rasterizer (drop --param raster=scanline)");
+  if (halfRange) return zbufferHalfRange(scene, camera, options, frame);
+  zbufferInRegions(scene, camera, options, int(rw), int(rh), frame);
 }
 
 void zbuffer(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
              Frame& frame) {
   const std::string& raster = params.text("raster");
-  if (hasTransparency(scene)) return zbufferWithTransparency(scene, camera, options, raster, frame);
+  if (hasTransparency(scene))
+    return zbufferWithTransparency(scene, camera, options, raster, sortKeyOf(params.text("sort-key")), frame);
+  if (params.text("region") != "full" || params.text("clear") == "half-range")
+    return zbufferSaving(scene, camera, options, params, frame);
   if (params.flag("occlusion-cull")) {
     if (params.integer("depth-slices") > 1)
       throw InputError("--param occlusion-cull=on: culls against one depth buffer over the whole range; drop "
@@ -149,7 +158,19 @@ AlgorithmInfo zbufferAlgorithm() {
               {"occlusion-cull", ParamType::Bool, "off", {}, -1e300, 1e300,
                "occlusion culling: meshes in batches nearest first, each mesh's screen box and nearest depth tested "
                "against a z-pyramid over the depth buffer before any of its triangles is set up; the triangles left "
-               "drawn by the textbook loop (a depth test per fragment, half-space rasterizer, whatever raster says)"}};
+               "drawn by the textbook loop (a depth test per fragment, half-space rasterizer, whatever raster says)"},
+              {"region", ParamType::Size, "full", {}, 1, 16384,
+               "draw the image region by region, WxH pixels at a time, with one z-buffer the size of a region (the "
+               "textbook loop on the half-space rasterizer, whatever raster says; the same image)"},
+              sortKeyParam("centroid",
+                           "scenes with transparency: after the opaque faces, the transparent ones are drawn back to "
+                           "front by this depth of each face (its area centroid, farthest or nearest vertex, or the "
+                           "mean of its vertices), depth-tested without depth writes; no order by one depth per face "
+                           "is right for interpenetrating or cyclically overlapping faces (docs/transparency.md)"),
+              {"clear", ParamType::Choice, "every-frame", {"every-frame", "half-range"}, -1e300, 1e300,
+               "half-range: the z-buffer is kept in the Frame and not cleared between frames; even frames use the "
+               "lower half of its values, odd frames the upper half with the test reversed (one bit of precision "
+               "less; the textbook loop on the half-space rasterizer, whatever raster says)"}};
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.guarantee.condition = "up to the depth format's precision: z-fighting is counted as ambiguous";
   a.run = zbuffer;

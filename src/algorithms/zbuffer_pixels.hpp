@@ -90,7 +90,10 @@ class ZBufferPixels {
       }
   }
 
-  uint64_t bytes() const { return depth_.size() * sizeof(T) + winner_.size() * sizeof(uint32_t); }
+  void addMemory(Stats& st) const {
+    st.addMemory("depth_buffer", depth_.size() * sizeof(T));
+    st.addMemory("winner_ids", winner_.size() * sizeof(uint32_t));
+  }
 
  private:
   const Camera& camera_;
@@ -102,10 +105,10 @@ class ZBufferPixels {
 };
 
 /// The statistics every z-buffer of this kind reports, as drawScene fills them: front-end counts,
-/// the counters, the memory of its buffers (plus the set-up triangles, the front end's and the
-/// frame's), the depth format.
+/// the counters, the memory of the set-up triangles, the front end's and the frame's (the
+/// algorithm adds its own buffers'), the depth format.
 inline void recordZBufferStats(Stats& st, const FrontEndCounters& fe, uint64_t frontEndBytes,
-                               const std::vector<SetupTriangle>& triangles, const DrawCounters& n, uint64_t bufferBytes,
+                               const std::vector<SetupTriangle>& triangles, const DrawCounters& n,
                                const RenderOptions& options, const Frame& frame) {
   st.depth_format = options.depthFormat.name();
   st.triangles_clipped = fe.clipped;
@@ -116,7 +119,9 @@ inline void recordZBufferStats(Stats& st, const FrontEndCounters& fe, uint64_t f
   st.depth_writes = n.depthWrites;
   st.color_writes = n.colorWrites;
   st.covered_pixels = n.covered;
-  st.memory_bytes = bufferBytes + triangles.capacity() * sizeof(SetupTriangle) + frontEndBytes + frameBytes(frame);
+  st.addMemory("setup_triangles", triangles.capacity() * sizeof(SetupTriangle));
+  st.addMemory("front_end", frontEndBytes);
+  addFrameMemory(st, frame);
 }
 
 }  // namespace hsr::algo

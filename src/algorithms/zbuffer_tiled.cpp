@@ -191,7 +191,7 @@ void zbufferTiled(const Scene& scene, const Camera& cam, const RenderOptions& op
     st.addTime("resolve", timer.lap());
     st.setDetail("rasterizer", "tiled");
     st.color_writes = 0;
-    st.memory_bytes += frame.depth.size() * sizeof(float);
+    st.addMemory("frame.depth", frame.depth.size() * sizeof(float));
     return;
   }
   const DepthSetup depth{opt.depthFormat, cam.near, cam.far, cam.orthographic};
@@ -205,8 +205,6 @@ void zbufferTiled(const Scene& scene, const Camera& cam, const RenderOptions& op
   st.addTime("frontend", timer.lap());
   drawTiled(opt, depth, shade, frame, state, n, tiledCounters);
   st.addTime("raster", timer.lap());
-  uint64_t bufferBytes = state.memoryBytes();
-  if (culling) bufferBytes += culling->memoryBytes;
 
   tiledStats(st, state.fe, &state.bins, tiledCounters);
   // Fragments that won the depth test: each writes the colour in the textbook z-buffer; this
@@ -222,7 +220,10 @@ void zbufferTiled(const Scene& scene, const Camera& cam, const RenderOptions& op
     st.setDetail("triangles_culled_occlusion", culling->trianglesCulled);
   }
   st.covered_pixels = n.covered;
-  st.memory_bytes = bufferBytes + frameBytes(frame) + state.fe.memoryBytes();
+  st.addMemory("tiled_state", state.memoryBytes());
+  if (culling) st.addMemory("occlusion_buffer", culling->memoryBytes);
+  st.addMemory("front_end", state.fe.memoryBytes());
+  addFrameMemory(st, frame);
 }
 
 }  // namespace hsr::algo

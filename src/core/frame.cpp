@@ -45,6 +45,7 @@ void Stats::addTime(const std::string& stage, double ms) {
 }
 
 void Stats::addMemory(std::string_view name, uint64_t bytes) {
+  if (bytes == 0) return;
   memory_bytes += bytes;
   for (auto& [k, v] : memory)
     if (k == name) {

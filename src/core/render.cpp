@@ -111,10 +111,12 @@ void render(const Scene& scene, const Camera& camera, const RenderOptions& optio
   }
 }
 
-uint64_t algo::frameBytes(const Frame& frame) {
-  return frame.depth.size() * sizeof(float) + frame.faceId.size() * sizeof(int32_t) +
-         frame.triangleId.size() * sizeof(int32_t) + frame.color.size() * sizeof(Rgba8) +
-         frame.writes.size() * sizeof(WriteCount);
+void algo::addFrameMemory(Stats& st, const Frame& frame) {
+  st.addMemory("frame.depth", frame.depth.size() * sizeof(float));
+  st.addMemory("frame.face_id", frame.faceId.size() * sizeof(int32_t));
+  st.addMemory("frame.triangle_id", frame.triangleId.size() * sizeof(int32_t));
+  st.addMemory("frame.color", frame.color.size() * sizeof(Rgba8));
+  st.addMemory("frame.writes", frame.writes.size() * sizeof(WriteCount));
 }
 
 }  // namespace hsr
