@@ -26,15 +26,6 @@ Rgba8 over(Rgba8 src, Rgba8 dst) {
   return {mix(src.r, dst.r), mix(src.g, dst.g), mix(src.b, dst.b), uint8_t(a + (dst.a * keep + 127) / 255)};
 }
 
-// Per-pixel scratch kept between frames on each calling thread: a frame rewrites warm pages
-// instead of faulting fresh ones in (drawScene is not re-entered on one thread). One per use.
-enum class Scratch { Depth, Winner };
-template <class T, Scratch Use>
-std::vector<T>& scratch() {
-  thread_local std::vector<T> buffer;
-  return buffer;
-}
-
 // One frame's per-pixel state and the rule's work on it, for depth storage S and mapping M
 // (used by DepthTest only; the other rules keep no depth buffer).
 template <WriteRule R, DepthStorage S, DepthMapping M>

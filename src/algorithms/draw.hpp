@@ -39,6 +39,15 @@ const char* drawRasterName(DrawRaster raster);
 ParamSpec drawRasterParam(const char* defaultValue);
 DrawRaster drawRasterOf(const AlgorithmParams& params);
 
+/// Per-pixel scratch kept between frames on each calling thread: a frame rewrites warm pages
+/// instead of faulting fresh ones in (a drawing loop is not re-entered on one thread). One per use.
+enum class Scratch { Depth, Winner };
+template <class T, Scratch Use>
+std::vector<T>& scratch() {
+  thread_local std::vector<T> buffer;
+  return buffer;
+}
+
 /// The counters of the statistics, as every algorithm counts them.
 struct DrawCounters {
   uint64_t depthTests = 0;   // z comparisons (DepthTest only)

@@ -17,6 +17,7 @@
 //   stored values differ only in the last bit tie, and the first drawn stays.
 #include <bit>
 #include <limits>
+#include <span>
 #include <type_traits>
 
 #include "algorithms/algorithms.hpp"
@@ -30,12 +31,12 @@ namespace hsr::algo {
 namespace {
 
 // Fills the frame's pixel idx from the set-up triangle that won it.
-void resolvePixel(const SetupTriangle& t, const TriangleShader& shade, const RenderOptions& options, int x, int y,
-                  size_t idx, Frame& frame) {
+void resolvePixel(const SetupTriangle& t, Rgba8 color, const RenderOptions& options, int x, int y, size_t idx,
+                  Frame& frame) {
   if (has(options.outputs, FrameOutputs::FaceIds)) frame.faceId[idx] = int32_t(t.face);
   if (has(options.outputs, FrameOutputs::TriangleIds)) frame.triangleId[idx] = int32_t(t.triangle);
   frame.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
-  if (has(options.outputs, FrameOutputs::Color)) frame.color[idx] = triangleColor(t, shade);
+  if (has(options.outputs, FrameOutputs::Color)) frame.color[idx] = color;
 }
 
 // Fills the frame's pixel idx with the background.
@@ -73,20 +74,25 @@ std::vector<std::vector<uint32_t>> binByRegion(const std::vector<SetupTriangle>&
 
 template <DepthStorage S, DepthMapping M>
 void drawRegions(const std::vector<SetupTriangle>& tris, const Camera& camera, const RenderOptions& options,
-                 const TriangleShader& shade, int rw, int rh, Frame& frame, DrawCounters& n) {
+                 std::span<const Rgba8> colors, int rw, int rh, Frame& frame, DrawCounters& n) {
   using Pixels = ZBufferPixels<S, M>;
   using T = typename Pixels::T;
   const int columns = (camera.width + rw - 1) / rw, rows = (camera.height + rh - 1) / rh;
   const std::vector<std::vector<uint32_t>> bins = binByRegion(tris, rw, rh, columns, rows);
   const T clear = quantizeDepth<S>(options.depthFormat.clearValue());
-  std::vector<T> depth(size_t(rw) * size_t(rh));  // the one z-buffer, a region's size
-  std::vector<uint32_t> winner(depth.size());      // 1 + the winning triangle, 0 = none
+  Timer timer;
+  double clearMs = 0, rasterMs = 0, resolveMs = 0;
+  std::vector<T>& depth = scratch<T, Scratch::Depth>();  // the one z-buffer, a region's size
+  std::vector<uint32_t>& winner = scratch<uint32_t, Scratch::Winner>();  // 1 + the winning triangle, 0 = none
+  depth.resize(size_t(rw) * size_t(rh));
+  winner.resize(depth.size());
   for (int ry = 0; ry < rows; ++ry)
     for (int rx = 0; rx < columns; ++rx) {
       const int x0 = rx * rw, y0 = ry * rh;
       const int x1 = std::min(x0 + rw, camera.width) - 1, y1 = std::min(y0 + rh, camera.height) - 1;
       std::fill(depth.begin(), depth.end(), clear);
       std::fill(winner.begin(), winner.end(), 0);
+      clearMs += timer.lap();
       for (const uint32_t i : bins[size_t(ry) * size_t(columns) + size_t(rx)]) {
         const MappedPlanes m = mapPlanes<M>(tris[i].depthNum, tris[i].depthDen, camera.near, camera.far,
                                             camera.orthographic);
@@ -103,15 +109,20 @@ void drawRegions(const std::vector<SetupTriangle>& tris, const Camera& camera, c
           if (!frame.writes.empty()) ++frame.writes[frame.index(x, y)];
         });
       }
+      rasterMs += timer.lap();
       for (int y = y0; y <= y1; ++y)
         for (int x = x0; x <= x1; ++x) {
           const uint32_t w = winner[size_t(y - y0) * size_t(rw) + size_t(x - x0)];
           if (!w) continue;
-          resolvePixel(tris[w - 1], shade, options, x, y, frame.index(x, y), frame);
+          resolvePixel(tris[w - 1], colors.empty() ? Rgba8{} : colors[w - 1], options, x, y, frame.index(x, y), frame);
           ++n.covered;
         }
+      resolveMs += timer.lap();
     }
   Stats& st = frame.stats;
+  st.addTime("clear", clearMs);
+  st.addTime("raster", rasterMs);
+  st.addTime("resolve", resolveMs);
   st.addMemory("depth_buffer", depth.size() * sizeof(T));
   st.addMemory("winner_ids", winner.size() * sizeof(uint32_t));
   uint64_t binBytes = bins.capacity() * sizeof(bins[0]);
@@ -163,11 +174,12 @@ struct HalfRangeBuffer : KeptState::Base {
 
 template <DepthStorage S, DepthMapping M>
 void drawHalfRange(const std::vector<SetupTriangle>& tris, const Camera& camera, const RenderOptions& options,
-                   const TriangleShader& shade, Frame& frame, DrawCounters& n) {
+                   std::span<const Rgba8> colors, Frame& frame, DrawCounters& n) {
   using Keys = HalfRangeKeys<S, M>;
   using Buffer = HalfRangeBuffer<S, M>;
   using T = DepthT<S>;
   Stats& st = frame.stats;
+  Timer timer;
   Buffer* buffer = frame.kept.get<Buffer>();
   const bool fresh = !buffer || buffer->width != camera.width || buffer->height != camera.height;
   if (fresh) {  // the first frame into this Frame (or a new size or depth format): cleared once
@@ -178,6 +190,7 @@ void drawHalfRange(const std::vector<SetupTriangle>& tris, const Camera& camera,
     made->winner.assign(made->keys.size(), 0);
     buffer = made.get();
     frame.kept.reset(std::move(made));
+    st.addTime("clear", timer.lap());
   }
   const bool odd = buffer->frames % 2 == 1;
   const typename Keys::K clearFarness = Keys::farness(quantizeDepth<S>(options.depthFormat.clearValue()));
@@ -198,12 +211,14 @@ void drawHalfRange(const std::vector<SetupTriangle>& tris, const Camera& camera,
       if (!frame.writes.empty()) ++frame.writes[idx];
     });
   }
+  st.addTime("raster", timer.lap());
   uint64_t reset = 0;
   for (int y = 0; y < camera.height; ++y)
     for (int x = 0; x < camera.width; ++x) {
       const size_t idx = frame.index(x, y);
       if (Keys::inHalf(buffer->keys[idx], odd)) {
-        resolvePixel(tris[buffer->winner[idx] - 1], shade, options, x, y, idx, frame);
+        const uint32_t w = buffer->winner[idx];
+        resolvePixel(tris[w - 1], colors.empty() ? Rgba8{} : colors[w - 1], options, x, y, idx, frame);
         ++n.covered;
         continue;
       }
@@ -213,6 +228,7 @@ void drawHalfRange(const std::vector<SetupTriangle>& tris, const Camera& camera,
         ++reset;
       }
     }
+  st.addTime("resolve", timer.lap());
   ++buffer->frames;
   st.addMemory("depth_buffer", buffer->keys.size() * sizeof(typename Keys::K));
   st.addMemory("winner_ids", buffer->winner.size() * sizeof(uint32_t));
@@ -233,11 +249,19 @@ void drawWithFrontEnd(const Scene& scene, const Camera& camera, const RenderOpti
   runFrontEnd(scene, camera, options, fe);
   const std::vector<SetupTriangle> triangles = fe.flatten();
   st.addTime("frontend", timer.lap());
-  if (clearFrame) frame.clear(options.background, resolveThreads(options.threads));
-  DrawCounters n;
+  if (clearFrame) {
+    frame.clear(options.background, resolveThreads(options.threads));
+    st.addTime("clear", timer.lap());
+  }
+  std::vector<Rgba8> colors;  // each triangle's shaded colour, once (far fewer triangles than pixels)
+  if (has(options.outputs, FrameOutputs::Color)) {
+    colors.resize(triangles.size());
+    for (size_t i = 0; i < triangles.size(); ++i) colors[i] = triangleColor(triangles[i], shade);
+  }
+  DrawCounters n;  // (the draw times its stages: clear, raster, resolve)
   visitDepthFormat(options.depthFormat,
-                   [&]<DepthStorage S, DepthMapping M>() { draw.template operator()<S, M>(triangles, shade, n); });
-  st.addTime("raster", timer.lap());
+                   [&]<DepthStorage S, DepthMapping M>() { draw.template operator()<S, M>(triangles, colors, n); });
+  st.addMemory("triangle_colors", colors.size() * sizeof(Rgba8));
   recordZBufferStats(st, fe, fe.memoryBytes(), triangles, n, options, frame);
   st.setDetail("rasterizer", "halfspace");
 }
@@ -249,8 +273,8 @@ void zbufferInRegions(const Scene& scene, const Camera& camera, const RenderOpti
   const int rw = std::min(regionWidth, camera.width), rh = std::min(regionHeight, camera.height);
   drawWithFrontEnd(scene, camera, options, frame, /*clearFrame=*/true,
                    [&]<DepthStorage S, DepthMapping M>(const std::vector<SetupTriangle>& tris,
-                                                       const TriangleShader& shade, DrawCounters& n) {
-                     drawRegions<S, M>(tris, camera, options, shade, rw, rh, frame, n);
+                                                       std::span<const Rgba8> colors, DrawCounters& n) {
+                     drawRegions<S, M>(tris, camera, options, colors, rw, rh, frame, n);
                    });
 }
 
@@ -258,8 +282,8 @@ void zbufferHalfRange(const Scene& scene, const Camera& camera, const RenderOpti
   // (A Frame that changes depth format starts a new buffer: its kept state is of another type.)
   drawWithFrontEnd(scene, camera, options, frame, /*clearFrame=*/false,
                    [&]<DepthStorage S, DepthMapping M>(const std::vector<SetupTriangle>& tris,
-                                                       const TriangleShader& shade, DrawCounters& n) {
-                     drawHalfRange<S, M>(tris, camera, options, shade, frame, n);
+                                                       std::span<const Rgba8> colors, DrawCounters& n) {
+                     drawHalfRange<S, M>(tris, camera, options, colors, frame, n);
                    });
 }
 
