@@ -52,7 +52,9 @@ TEST(ReversePainter, NeverOverdrawsAndStopsWhenFull) {
     if (b.name == "sphere" || b.name == "random") continue;  // (large defaults; random below)
     for (const char* raster : {"binned", "halfspace"}) {
       const Frame f = renderWith("builtin:" + b.name, "reverse-painter", {{"raster", raster}}, 96, 72, false);
-      EXPECT_EQ(f.stats.color_writes, f.stats.covered_pixels) << b.name << " " << raster;
+      // (With transparent faces a pixel takes fragments until it is opaque.)
+      if (b.name == "glass") EXPECT_GT(f.stats.color_writes, f.stats.covered_pixels) << raster;
+      else EXPECT_EQ(f.stats.color_writes, f.stats.covered_pixels) << b.name << " " << raster;
     }
   }
   // The layers fill the view: the first (nearest) layer fills it, the rest is skipped.

@@ -26,6 +26,26 @@ Rgba8 over(Rgba8 src, Rgba8 dst) {
   return {mix(src.r, dst.r), mix(src.g, dst.g), mix(src.b, dst.b), uint8_t(a + (dst.a * keep + 127) / 255)};
 }
 
+// What front-to-back blending keeps per pixel: the premultiplied colour of the fragments so far
+// (0..255 scale) and the share of light still coming through them (1: nothing yet; 0: opaque).
+struct UnderSum {
+  float r = 0, g = 0, b = 0, through = 1;
+  // `src` (straight alpha) composited under what is there: the "under" operator.
+  void addUnder(Rgba8 src) {
+    const float w = through * (src.a / 255.0f);
+    r += w * src.r;
+    g += w * src.g;
+    b += w * src.b;
+    through = src.a == 255 ? 0.0f : through * (1 - src.a / 255.0f);
+  }
+  // The pixel over an opaque background, rounded once to 8 bits.
+  Rgba8 over(Rgba8 background) const {
+    auto byte = [](float v) { return uint8_t(std::clamp(std::lround(v), 0l, 255l)); };
+    return {byte(r + through * background.r), byte(g + through * background.g), byte(b + through * background.b),
+            255};
+  }
+};
+
 // One frame's per-pixel state and the rule's work on it, for depth storage S and mapping M
 // (used by DepthTest only; the other rules keep no depth buffer).
 template <WriteRule R, DepthStorage S, DepthMapping M>
@@ -44,6 +64,10 @@ class FragmentWriter {
     if constexpr (kDepth) depth_.assign(pixels, clear_);
     else depth_.clear();
     if constexpr (R == WriteRule::DepthTestBlend) nearest_.assign(pixels, INFINITY);
+    if constexpr (R == WriteRule::BlendUnder) {
+      if (color_) sums_.assign(pixels, UnderSum{});
+      else sums_.clear();
+    }
     if (keepWinner_) winner_.assign(pixels, 0);
     else winner_.clear();
   }
@@ -53,12 +77,13 @@ class FragmentWriter {
     st.addMemory("winner_ids", winner_.size() * sizeof(uint32_t));
     st.addMemory("triangle_colors", colors_.size() * sizeof(Rgba8));
     st.addMemory("nearest_depths", nearest_.size() * sizeof(double));
+    st.addMemory("blend_sums", sums_.size() * sizeof(UnderSum));
   }
 
   // Every triangle's shaded colour, once (on the pool), for resolving: far fewer triangles than
   // pixels, and a colour is the same all over its triangle.
   void shadeTriangles(int threads) {
-    if (!color_ || R == WriteRule::Blend || R == WriteRule::DepthTestBlend) return;
+    if (!color_ || R == WriteRule::Blend || R == WriteRule::DepthTestBlend || R == WriteRule::BlendUnder) return;
     colors_.resize(tris_.size());
     constexpr size_t kChunk = 4096;
     parallelFor(0, (tris_.size() + kChunk - 1) / kChunk, threads, [&](size_t chunk) {
@@ -98,6 +123,8 @@ class FragmentWriter {
     for (int y = y0; y < y1; ++y)
       for (int x = 0; x < cam_.width; ++x) {
         const size_t idx = frame_.index(x, y);
+        if constexpr (R == WriteRule::BlendUnder)  // the background under everything drawn
+          if (color_) frame_.color[idx] = sums_[idx].over(opt_.background);
         if (!keepWinner_) {
           if (depth_[idx] == clear_) continue;
           frame_.depth[idx] = float(eyeDepthOfStored<S, M>(double(depth_[idx]), cam_.near, cam_.far, cam_.orthographic));
@@ -108,7 +135,8 @@ class FragmentWriter {
           if (triangleIds) frame_.triangleId[idx] = int32_t(derived_ ? derived_->triangle[t.triangle] : t.triangle);
           frame_.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
           // (Blend composited its colours as it drew; the others show the last written.)
-          if (color_ && R != WriteRule::Blend && R != WriteRule::DepthTestBlend) frame_.color[idx] = colors_[winner_[idx] - 1];
+          if (color_ && R != WriteRule::Blend && R != WriteRule::DepthTestBlend && R != WriteRule::BlendUnder)
+            frame_.color[idx] = colors_[winner_[idx] - 1];
         }
         ++n.covered;
       }
@@ -131,6 +159,9 @@ class FragmentWriter {
       }
     } else if constexpr (R == WriteRule::WhereUnwritten) {
       if (winner_[idx]) return;
+      ++n.filled;
+    } else if constexpr (R == WriteRule::BlendUnder) {
+      if (color_ ? sums_[idx].through == 0 : winner_[idx] != 0) return;  // opaque: nothing behind shows
     }
     if constexpr (R == WriteRule::DepthTestBlend) {
       // The ids show the nearest fragment drawn, transparent or not (transparent ones write no depth).
@@ -139,6 +170,9 @@ class FragmentWriter {
         nearest_[idx] = d;
         winner_[idx] = i + 1;
       }
+    } else if (R == WriteRule::BlendUnder) {
+      if (!winner_[idx]) winner_[idx] = i + 1;  // the first fragment is the nearest
+      if (!color_) ++n.filled;
     } else if (keepWinner_) {
       winner_[idx] = i + 1;
     }
@@ -147,6 +181,10 @@ class FragmentWriter {
       ++n.colorWrites;
       if constexpr (R == WriteRule::Blend || R == WriteRule::DepthTestBlend)
         frame_.color[idx] = over(colorOf(tris_[i]), frame_.color[idx]);
+      if constexpr (R == WriteRule::BlendUnder) {
+        sums_[idx].addUnder(colorOf(tris_[i]));
+        if (sums_[idx].through == 0) ++n.filled;
+      }
     }
     if (!frame_.writes.empty()) ++frame_.writes[idx];
   }
@@ -169,6 +207,7 @@ class FragmentWriter {
   std::vector<uint32_t>& winner_ = scratch<uint32_t, Scratch::Winner>();
   std::vector<Rgba8> colors_;     // per triangle: its colour (shadeTriangles)
   std::vector<double> nearest_;   // DepthTestBlend: the eye depth of the winner's fragment
+  std::vector<UnderSum> sums_;    // BlendUnder: each pixel's blend so far
 };
 
 // Per tile of kBinTile pixels, the triangles whose box meets it, in drawing order.
@@ -190,7 +229,9 @@ void drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const Came
   FragmentWriter<R, S, M> writer(tris, cam, opt, shade, frame, derived);
   const int threads = resolveThreads(opt.threads);
   // The reverse painter's stops where every pixel is written: nothing more can show.
-  auto full = [](const DrawCounters& n, uint64_t pixels) { return R == WriteRule::WhereUnwritten && n.written == pixels; };
+  auto full = [](const DrawCounters& n, uint64_t pixels) {
+    return (R == WriteRule::WhereUnwritten || R == WriteRule::BlendUnder) && n.filled == pixels;
+  };
   if (raster != DrawRaster::Binned) {
     const uint64_t pixels = uint64_t(cam.width) * uint64_t(cam.height);
     for (uint32_t i = 0; i < tris.size(); ++i) {
@@ -240,6 +281,7 @@ const char* writeRuleName(WriteRule rule) {
     case WriteRule::WhereUnwritten: return "where-unwritten";
     case WriteRule::Blend: return "blend";
     case WriteRule::DepthTestBlend: return "depth-test-blend";
+    case WriteRule::BlendUnder: return "blend-under";
   }
   return "?";
 }
@@ -283,6 +325,7 @@ void drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawR
     case WriteRule::WhereUnwritten: return withRule.template operator()<WriteRule::WhereUnwritten>();
     case WriteRule::Blend: return withRule.template operator()<WriteRule::Blend>();
     case WriteRule::DepthTestBlend: return withRule.template operator()<WriteRule::DepthTestBlend>();
+    case WriteRule::BlendUnder: return withRule.template operator()<WriteRule::BlendUnder>();
   }
 }
 
@@ -317,7 +360,7 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
   addFrameMemory(st, frame);
   st.setDetail("rasterizer", drawRasterName(raster));
   st.setDetail("write_rule", writeRuleName(rule));
-  if (rule == WriteRule::WhereUnwritten) st.setDetail("skipped_full", n.skippedFull);
+  if (rule == WriteRule::WhereUnwritten || rule == WriteRule::BlendUnder) st.setDetail("skipped_full", n.skippedFull);
 }
 
 }  // namespace hsr::algo

@@ -24,6 +24,8 @@ enum class WriteRule : uint8_t {
   Blend,           // transparency: the colour composited over by the triangle's alpha; ids and depth overwritten
   DepthTestBlend,  // the z-buffer's transparent pass: depth-tested; an opaque triangle (alpha 255) writes depth
                    // and colour, a transparent one writes no depth and composites its colour over
+  BlendUnder,      // the reverse painter's with transparency: front to back, each fragment composited under what
+                   // the pixel holds until it is opaque; ids the first (nearest); the background under all at the end
 };
 const char* writeRuleName(WriteRule rule);
 
@@ -56,6 +58,7 @@ struct DrawCounters {
   uint64_t covered = 0;      // pixels showing a surface at the end
   uint64_t written = 0;      // fragments that wrote a pixel (with or without colour)
   uint64_t skippedFull = 0;  // WhereUnwritten: triangles (binned: triangle-tile pairs) not drawn, all full
+  uint64_t filled = 0;       // WhereUnwritten, BlendUnder: pixels nothing drawn later can change (written; opaque)
   void add(const DrawCounters& o) {
     depthTests += o.depthTests;
     depthWrites += o.depthWrites;
@@ -63,6 +66,7 @@ struct DrawCounters {
     covered += o.covered;
     written += o.written;
     skippedFull += o.skippedFull;
+    filled += o.filled;
   }
 };
 

@@ -2,7 +2,9 @@
 // only once (a mask of written pixels, no depth buffer), stopping when the image is full. It
 // never overdraws, but it needs an order that is right for every pair of overlapping faces: a
 // sort key gives the painter's order reversed, with the painter's failures; the BSP tree's
-// front-to-back order (the default) is exact.
+// front-to-back order (the default) is exact. With transparent faces each pixel takes fragments
+// until it is opaque, each composited under the nearer ones (the "under" operator), and the
+// background under all: the order that blends right is then the same exact one.
 #include "algorithms/algorithms.hpp"
 #include "algorithms/draw.hpp"
 #include "algorithms/sort_keys.hpp"
@@ -12,12 +14,13 @@ namespace {
 
 void reversePainter(const Scene& scene, const Camera& camera, const RenderOptions& options,
                     const AlgorithmParams& params, Frame& frame) {
+  const WriteRule rule = hasTransparency(scene) && has(options.outputs, FrameOutputs::Color) ? WriteRule::BlendUnder
+                                                                                             : WriteRule::WhereUnwritten;
   if (params.text("order") == "bsp") {  // the BSP tree's exact order, reversed
-    drawInBspOrder(scene, camera, options, BspBuildOptions{}, WriteRule::WhereUnwritten, drawRasterOf(params),
-                   /*frontToBack=*/true, frame);
+    drawInBspOrder(scene, camera, options, BspBuildOptions{}, rule, drawRasterOf(params), /*frontToBack=*/true, frame);
   } else {
     const SortKey key = sortKeyOf(params.text("order"));
-    drawScene(scene, camera, options, WriteRule::WhereUnwritten, drawRasterOf(params),
+    drawScene(scene, camera, options, rule, drawRasterOf(params),
               byFaceRank(faceRanks(faceKeys(scene, camera, key), /*backToFront=*/false)), frame);
   }
   frame.stats.setDetail("order", params.text("order"));
