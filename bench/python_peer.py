@@ -14,7 +14,8 @@ NumPy arrays, rows flipped to put row 0 at the top, depth linearised to eye dept
 conventions rather than 24-bit precision. Timings are interleaved (hsr, then GL) and summarised
 by medians. Agreement: face ids equal except on edge pixels (a 4-neighbour differs in either
 image); eye depth where both show the same face: the largest relative difference and the number
-of pixels over 1e-5.
+of pixels over 1e-5. Memory: a batch's RSS growth in a new process (its first call, then a
+second with the first one's arrays alive) against the arrays' bytes.
 
 Run: PYTHONPATH=build/python /usr/bin/python3 bench/python_peer.py [--markdown]
 """
