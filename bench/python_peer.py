@@ -14,7 +14,8 @@ NumPy arrays, rows flipped to put row 0 at the top, depth linearised to eye dept
 conventions rather than 24-bit precision. Timings are interleaved (hsr, then GL) and summarised
 by medians. Agreement: face ids equal except on edge pixels (a 4-neighbour differs in either
 image); eye depth where both show the same face: the largest relative difference and the number
-of pixels over 1e-5.
+of pixels over 1e-5. Memory: a batch's RSS growth in a new process (its first call, then a
+second with the first one's arrays alive) against the arrays' bytes.
 
 Run: PYTHONPATH=build/python /usr/bin/python3 bench/python_peer.py [--markdown]
 """
@@ -23,6 +24,7 @@ import ctypes
 import json
 import os
 import statistics
+import subprocess
 import sys
 import time
 
@@ -43,6 +45,7 @@ def parse_args():
                    help="GL platform: EGL surfaceless, OSMesa, or EGL with OSMesa as the fallback")
     p.add_argument("--markdown", action="store_true", help="print Markdown table rows")
     p.add_argument("--json", action="store_true", help="print one JSON object per scene")
+    p.add_argument("--memory-probe", action="store_true", help=argparse.SUPPRESS)  # (batch_memory's child)
     return p.parse_args()
 
 
@@ -331,16 +334,32 @@ def measure(hsr, gl, scene, cams, threads, frames):
     return statistics.median(hsr_ms), statistics.median(gl_ms), agreement, statistics.median(gl_draw_ms)
 
 
-def batch_memory(hsr, scene, cams, threads):
-    """RSS growth (MB) of one batch call with its arrays alive, and the arrays' own bytes (MB)."""
+def batch_memory(name, args):
+    """RSS growth (MB) of a first batch call in a new process, with its arrays alive; of a second
+    call with the first one's arrays still alive; and the arrays' own bytes (MB)."""
+    probe = [sys.executable, os.path.abspath(__file__), name, "--memory-probe", "--batch-size", args.batch_size,
+             "--views", str(args.views), "--threads", str(args.threads)]
+    return json.loads(subprocess.run(probe, check=True, capture_output=True, text=True).stdout)
+
+
+def memory_probe(args):
+    import hsr
+    scene = hsr.load(args.scenes[0])
+    cams = orbit_cameras(hsr, scene, args.views, *size_of(args.batch_size))
+    hsr.render(scene, cams[:1], outputs=("depth", "face_id"), threads=args.threads)  # the code's pages, the pool's threads
     before = rss_mb()
-    out = hsr.render(scene, cams, outputs=("depth", "face_id"), threads=threads)
-    grown = rss_mb() - before
-    return grown, sum(a.nbytes for a in out.values()) / 1e6
+    first = hsr.render(scene, cams, outputs=("depth", "face_id"), threads=args.threads)
+    after_first = rss_mb()
+    second = hsr.render(scene, cams, outputs=("depth", "face_id"), threads=args.threads)
+    print(json.dumps({"first_mb": after_first - before, "second_mb": rss_mb() - after_first,
+                      "outputs_mb": sum(a.nbytes for a in second.values()) / 1e6}))
+    del first
 
 
 def main():
     args = parse_args()
+    if args.memory_probe:
+        return memory_probe(args)
     platform = make_context(args.platform, args.threads)
     from OpenGL import GL
     import hsr
@@ -354,7 +373,7 @@ def main():
     if args.markdown:
         print(f"| scene | triangles | 1 view {args.size}: hsr ms | GL ms (draw + read) | ratio | ids equal % | non-edge mismatches "
               f"| depth max rel (pixels > 1e-5) | {args.views} views {args.batch_size}: hsr ms | GL ms (draw + read) | ratio | ids equal % "
-              f"| non-edge mismatches | depth max rel (pixels > 1e-5) | batch RSS growth / outputs MB |")
+              f"| non-edge mismatches | depth max rel (pixels > 1e-5) | batch RSS growth, 1st and 2nd call / outputs MB |")
         print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for name in args.scenes:
         scene = hsr.load(name)
@@ -362,14 +381,15 @@ def main():
         one = measure(hsr, gl, scene, scene.default_camera(one_w, one_h), args.threads, args.frames)
         cams = orbit_cameras(hsr, scene, args.views, batch_w, batch_h)
         many = measure(hsr, gl, scene, cams, args.threads, max(1, args.frames // 2))
-        grown, outputs = batch_memory(hsr, scene, cams, args.threads)
+        memory = batch_memory(name, args)
         row = {"scene": name, "triangles": scene.triangle_count, "threads": args.threads, "platform": platform[0],
                "gl_renderer": renderer,
                "one": {"size": args.size, "hsr_ms": one[0], "gl_ms": one[1], "ratio": one[1] / one[0],
                        "gl_draw_read_ms": one[3], **one[2].as_dict()},
                "batch": {"views": args.views, "size": args.batch_size, "hsr_ms": many[0], "gl_ms": many[1],
                          "gl_draw_read_ms": many[3],
-                         "ratio": many[1] / many[0], **many[2].as_dict(), "rss_growth_mb": grown, "outputs_mb": outputs}}
+                         "ratio": many[1] / many[0], **many[2].as_dict(), "rss_growth_first_mb": memory["first_mb"],
+                         "rss_growth_second_mb": memory["second_mb"], "outputs_mb": memory["outputs_mb"]}}
         if args.json:
             print(json.dumps(row))
         elif args.markdown:
@@ -378,7 +398,7 @@ def main():
             print(f"| `{short}` | {row['triangles']} | {o['hsr_ms']:.1f} | {o['gl_ms']:.1f} ({o['gl_draw_read_ms']:.1f}) | {o['ratio']:.1f} "
                   f"| {100 * o['equal'] / max(1, o['covered']):.3f} | {o['non_edge_mismatches']} | {o['depth_max_rel']:.1e} ({o['depth_over_1e-5']}) "
                   f"| {b['hsr_ms']:.0f} | {b['gl_ms']:.0f} ({b['gl_draw_read_ms']:.0f}) | {b['ratio']:.1f} | {100 * b['equal'] / max(1, b['covered']):.3f} "
-                  f"| {b['non_edge_mismatches']} | {b['depth_max_rel']:.1e} ({b['depth_over_1e-5']}) | {grown:.0f} / {outputs:.0f} |")
+                  f"| {b['non_edge_mismatches']} | {b['depth_max_rel']:.1e} ({b['depth_over_1e-5']}) | {b['rss_growth_first_mb']:.0f}, {b['rss_growth_second_mb']:.0f} / {b['outputs_mb']:.0f} |")
         else:
             for label, r in (("1 view " + args.size, row["one"]), (f"{args.views} views {args.batch_size}", row["batch"])):
                 print(f"{name}, {label}: hsr {r['hsr_ms']:.1f} ms, GL {r['gl_ms']:.1f} ms ({r['gl_draw_read_ms']:.1f} drawing and "

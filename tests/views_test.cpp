@@ -42,6 +42,27 @@ TEST(RenderViews, EveryViewHasTheBitsOfRenderingItAlone) {
   }
 }
 
+TEST(RenderViews, FramesKeptByTheCallerGiveTheSameBits) {
+  const Scene scene = test::boxesScene();
+  const std::vector<Camera> cameras = orbit(scene, 5, 64, 48);
+  std::vector<Frame> frames;
+  for (int threads : {2, 1, 8, 2}) {  // frames of another size and count from the call before
+    RenderOptions options;
+    options.threads = threads;
+    options.outputs = FrameOutputs::FaceIds;
+    renderViews(
+        scene, cameras, options,
+        [&](size_t i, const Frame& frame, int) {
+          const Frame alone = render(scene, cameras[i], options);
+          EXPECT_EQ(test::firstDifference(frame.depth, alone.depth), -1) << "view " << i << ", threads " << threads;
+          EXPECT_EQ(test::firstDifference(frame.faceId, alone.faceId), -1);
+          EXPECT_TRUE(frame.triangleId.empty() && frame.color.empty());
+        },
+        frames);
+    EXPECT_EQ(frames.size(), size_t(threads) > cameras.size() ? 1u : size_t(threads));
+  }
+}
+
 TEST(RenderViews, TheFirstErrorReachesTheCaller) {
   const Scene scene = test::boxesScene();
   const std::vector<Camera> cameras = orbit(scene, 6, 32, 24);

@@ -22,6 +22,10 @@ namespace hsr {
 using ViewSink = std::function<void(size_t view, const Frame& frame, int threads)>;
 void renderViews(const Scene& scene, std::span<const Camera> cameras, const RenderOptions& options,
                  const ViewSink& deliver);
+/// The same with frames the caller keeps from call to call (no buffers allocated once warm):
+/// `frames` is resized to the frames the views need, one per thread rendering whole views.
+void renderViews(const Scene& scene, std::span<const Camera> cameras, const RenderOptions& options,
+                 const ViewSink& deliver, std::vector<Frame>& frames);
 
 /// For each face of `scene`, the index of the mesh (Scene::meshes) it belongs to.
 std::vector<int32_t> faceMeshIndices(const Scene& scene);

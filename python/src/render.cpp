@@ -163,13 +163,13 @@ void checkMemory(const Wanted& wanted, size_t views, size_t pixels) {
 
 // Where view `view`'s outputs go: one block per output, views one after another.
 struct Blocks {
-  std::array<std::unique_ptr<BlockOwner>, kOutputCount> block;
+  std::array<RawBlock, kOutputCount> block;
   size_t pixels = 0;
   template <class T>
   T* at(Output o, size_t view) const {
-    if (!block[o]) return nullptr;
+    if (!block[o].data()) return nullptr;
     const size_t viewBytes = pixels * kOutputs[o].channels * kOutputs[o].bytes;
-    return reinterpret_cast<T*>(static_cast<uint8_t*>(block[o]->data) + view * viewBytes);
+    return reinterpret_cast<T*>(static_cast<uint8_t*>(block[o].data()) + view * viewBytes);
   }
 };
 
@@ -177,8 +177,7 @@ Blocks allocate(const Wanted& wanted, size_t views, size_t pixels) {
   Blocks b;
   b.pixels = pixels;
   for (int o = 0; o < kOutputCount; ++o)
-    if (wanted[size_t(o)])
-      b.block[size_t(o)] = std::make_unique<BlockOwner>(views * pixels * kOutputs[o].channels * kOutputs[o].bytes);
+    if (wanted[size_t(o)]) b.block[size_t(o)] = takeBlock(views * pixels * kOutputs[o].channels * kOutputs[o].bytes);
   return b;
 }
 
@@ -215,11 +214,20 @@ hsr::Frame pooledFrame(const hsr::Camera& camera, hsr::FrameOutputs outputs) {
   BufferPool& pool = BufferPool::instance();
   const size_t n = size_t(camera.width) * size_t(camera.height);
   hsr::Frame frame;
-  frame.depth = pool.take<float>(n);
-  if (has(outputs, hsr::FrameOutputs::FaceIds)) frame.faceId = pool.take<int32_t>(n);
-  if (has(outputs, hsr::FrameOutputs::TriangleIds)) frame.triangleId = pool.take<int32_t>(n);
-  if (has(outputs, hsr::FrameOutputs::Color)) frame.color = pool.take<hsr::Rgba8>(n);
+  frame.depth = pool.take<hsr::FrameBuffer<float>>(n);
+  if (has(outputs, hsr::FrameOutputs::FaceIds)) frame.faceId = pool.take<hsr::FrameBuffer<int32_t>>(n);
+  if (has(outputs, hsr::FrameOutputs::TriangleIds)) frame.triangleId = pool.take<hsr::FrameBuffer<int32_t>>(n);
+  if (has(outputs, hsr::FrameOutputs::Color)) frame.color = pool.take<hsr::FrameBuffer<hsr::Rgba8>>(n);
   return frame;
+}
+
+// The frame's buffers back to the pool.
+void releaseFrame(hsr::Frame& frame) {
+  BufferPool& pool = BufferPool::instance();
+  pool.give(std::move(frame.depth));
+  pool.give(std::move(frame.faceId));
+  pool.give(std::move(frame.triangleId));
+  pool.give(std::move(frame.color));
 }
 
 py::dict renderOne(const SceneData& d, const hsr::Camera& camera, const hsr::RenderOptions& options, const Wanted& wanted) {
@@ -245,10 +253,7 @@ py::dict renderOne(const SceneData& d, const hsr::Camera& camera, const hsr::Ren
       case FaceId: a = handOver(std::move(frame.faceId), image, dtype); break;
       case TriangleId: a = handOver(std::move(frame.triangleId), image, dtype); break;
       case Color: a = handOver(std::move(frame.color), shapeOf(out, image), dtype); break;
-      default: {
-        void* data = blocks.block[size_t(o)]->data;
-        a = handOver(std::move(blocks.block[size_t(o)]), data, dtype, shapeOf(out, image));
-      }
+      default: a = handOver(std::move(blocks.block[size_t(o)]), shapeOf(out, image), dtype);
     }
     result[kOutputs[o].name] = a;
   }
@@ -262,19 +267,23 @@ py::dict renderBatch(const SceneData& d, const std::vector<hsr::Camera>& cameras
   {
     py::gil_scoped_release unlocked;
     blocks = allocate(wanted, cameras.size(), pixels);
-    hsr::renderViews(d.scene, cameras, options, [&](size_t view, const hsr::Frame& frame, int threads) {
-      copyFrame(frame, blocks, view);
-      resolveAttributes(d, cameras[view], frame, blocks, view, threads);
-    });
+    std::vector<hsr::Frame> frames(size_t(threadsOf(options)));
+    for (hsr::Frame& f : frames) f = pooledFrame(cameras[0], options.outputs);
+    hsr::renderViews(
+        d.scene, cameras, options,
+        [&](size_t view, const hsr::Frame& frame, int threads) {
+          copyFrame(frame, blocks, view);
+          resolveAttributes(d, cameras[view], frame, blocks, view, threads);
+        },
+        frames);
+    for (hsr::Frame& f : frames) releaseFrame(f);
   }
   const std::vector<py::ssize_t> image{py::ssize_t(cameras.size()), cameras[0].height, cameras[0].width};
   py::dict result;
-  for (int o = 0; o < kOutputCount; ++o) {
-    if (!wanted[size_t(o)]) continue;
-    void* data = blocks.block[size_t(o)]->data;
-    result[kOutputs[o].name] =
-        handOver(std::move(blocks.block[size_t(o)]), data, py::dtype(kOutputs[o].dtype), shapeOf(Output(o), image));
-  }
+  for (int o = 0; o < kOutputCount; ++o)
+    if (wanted[size_t(o)])
+      result[kOutputs[o].name] =
+          handOver(std::move(blocks.block[size_t(o)]), shapeOf(Output(o), image), py::dtype(kOutputs[o].dtype));
   return result;
 }
 

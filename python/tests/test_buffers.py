@@ -98,3 +98,21 @@ def test_freed_buffers_are_reused_and_kept_arrays_are_never_overwritten():
     for k in ALL:
         assert again[k].tobytes() == expected[k].tobytes(), k
     assert not np.array_equal(other["face_id"], again["face_id"])
+
+
+def test_batches_reuse_freed_blocks_and_never_kept_ones():
+    scene = hsr.load("builtin:cubes")
+    cams = [scene.default_camera(96, 64), hsr.Camera.look_at((0, 5, 1), (0, 0, 0), 96, 64)] * 3
+    first = hsr.render(scene, cams, outputs=ALL)
+    expected = {k: v.copy() for k, v in first.items()}
+    addresses = {module_buffer(v) for v in first.values()}
+    del first
+    gc.collect()
+    again = hsr.render(scene, cams, outputs=ALL)  # the freed blocks, taken from the module's pool
+    check_zero_copy(again)
+    assert {module_buffer(v) for v in again.values()} == addresses  # (outputs of one size may swap blocks)
+    other = hsr.render(scene, cams[::-1], outputs=ALL)  # `again` is alive: its blocks are not reused
+    assert not any(np.shares_memory(again[k], other[k]) for k in ALL)
+    for k in ALL:
+        assert again[k].tobytes() == expected[k].tobytes(), k
+        assert np.array_equal(other[k][::-1], again[k]), k

@@ -49,19 +49,25 @@ void requireIds(bool present, const char* what) {
 
 void renderViews(const Scene& scene, std::span<const Camera> cameras, const RenderOptions& options,
                  const ViewSink& deliver) {
+  std::vector<Frame> frames;
+  renderViews(scene, cameras, options, deliver, frames);
+}
+
+void renderViews(const Scene& scene, std::span<const Camera> cameras, const RenderOptions& options,
+                 const ViewSink& deliver, std::vector<Frame>& frames) {
   const int threads = resolveThreads(options.threads);
   if (cameras.size() < size_t(threads) || threads == 1) {
-    Frame frame;  // one after another, each view on every thread
+    frames.resize(1);  // one after another, each view on every thread
     for (size_t i = 0; i < cameras.size(); ++i) {
-      render(scene, cameras[i], options, frame);
-      deliver(i, frame, threads);
+      render(scene, cameras[i], options, frames[0]);
+      deliver(i, frames[0], threads);
     }
     return;
   }
   // Whole views per thread: a frame per thread, reused from view to view.
   RenderOptions single = options;
   single.threads = 1;
-  std::vector<Frame> frames(static_cast<size_t>(threads));
+  frames.resize(static_cast<size_t>(threads));
   FirstError error;
   runParallel(cameras.size(), threads, [&](size_t i) {
     if (error.raised()) return;
