@@ -350,9 +350,9 @@ void printShadowSummary(const hsr::Stats& s) {
              count("shadow_lit_pixels"), count("shadow_shadowed_pixels"), count("shadow_facing_away_pixels"));
   if (s.detailCount("shadow_wrong_pixels"))
     fmt::print("  shadow verify: {} wrong pixels against shadow rays, {} away from shadow edges, {} away from "
-               "shadow and face edges\n",
+               "shadow and face edges, {} unexplained (away from edges at the map's scale too)\n",
                count("shadow_wrong_pixels"), count("shadow_wrong_away_from_shadow_edges"),
-               count("shadow_wrong_away_from_edges"));
+               count("shadow_wrong_away_from_edges"), count("shadow_wrong_unexplained"));
 }
 
 // The human summary of one rendered frame.

@@ -80,7 +80,7 @@ TEST(Shadows, QuadOverPlaneCastsItsSquareUnderASun) {
   for (size_t i = 0; i < map.mask.size(); ++i)
     if (f.faceId[i] == 1) ASSERT_EQ(map.mask[i], ShadowMask::Lit) << "pixel " << i;
   EXPECT_EQ(map.facingAway, 0u);
-  const ShadowComparison c = compareShadowMasks(f, map, rays);
+  const ShadowComparison c = compareShadowMasks(s, f, map, rays, mapOfSize(1024));
   EXPECT_EQ(c.wrongAwayFromShadowEdges, 0u) << c.wrong << " wrong in all";
 }
 
@@ -96,7 +96,7 @@ TEST(Shadows, QuadOverPlaneUnderAPointLightCastsAnEnlargedSquare) {
   const ShadowResult map = shadowMap(s, cam, f, light, mapOfSize(2048));
   EXPECT_FALSE(map.lightCamera.orthographic);
   EXPECT_NEAR(shadowedGroundArea(f, map.mask, cam), 3.0, 0.04);
-  EXPECT_EQ(compareShadowMasks(f, map, rays).wrongAwayFromShadowEdges, 0u);
+  EXPECT_EQ(compareShadowMasks(s, f, map, rays, mapOfSize(2048)).wrongAwayFromShadowEdges, 0u);
 }
 
 TEST(Shadows, SurfacesSeenFromTheSideAwayFromTheLightAreShadowed) {
@@ -176,7 +176,7 @@ TEST_P(BuiltinShadows, MapAgreesWithShadowRaysAwayFromEdges) {
   EXPECT_GT(lit, 0u);
   for (int n = 256; n <= 4096; n *= 2) {
     const ShadowResult map = shadowMap(s, cam, f, light, mapOfSize(n));
-    const ShadowComparison c = compareShadowMasks(f, map, rays);
+    const ShadowComparison c = compareShadowMasks(s, f, map, rays, mapOfSize(n));
     std::printf("  %s map %5d: wrong %6llu, away from shadow edges %5llu, away from all edges %5llu, unexplained %llu\n",
                 bc.scene, n, (unsigned long long)c.wrong, (unsigned long long)c.wrongAwayFromShadowEdges,
                 (unsigned long long)c.wrongAwayFromEdges, (unsigned long long)c.wrongUnexplained);

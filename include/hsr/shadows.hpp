@@ -85,9 +85,9 @@ std::vector<ShadowMask> shadowRays(const Scene& scene, const Camera& view, const
 /// reference mask is not the same over its 3x3 neighbourhood (clipped to the image), and near a
 /// face edge when the frame's face ids are not (silhouettes and creases of the view): edges at
 /// the scale of the view's pixels. A wrong pixel away from both is still explained by the map's
-/// resolution when its texel is at an edge as the light sees it: the receivers (visible pixels)
-/// that fall in the 3x3 texels around it include both lit and shadowed ones (in the reference),
-/// or show more than one face.
+/// resolution when its texel is at an edge as the light sees it: over the 3x3 texels around it,
+/// the receivers (visible pixels) that fall there include both lit and shadowed ones (in the
+/// reference), or the light sees more than one face (the map rendered again with face ids).
 struct ShadowComparison {
   uint64_t wrong = 0;                 // pixels whose mask differs from the reference's
   uint64_t wrongAwayFromShadowEdges = 0;
@@ -96,8 +96,8 @@ struct ShadowComparison {
   uint64_t shadowEdgePixels = 0, faceEdgePixels = 0;
   std::vector<std::pair<int, int>> firstWrongAwayFromEdges, firstUnexplained;  // up to 16 (x, y) each
 };
-ShadowComparison compareShadowMasks(const Frame& frame, const ShadowResult& map,
-                                    const std::vector<ShadowMask>& reference);
+ShadowComparison compareShadowMasks(const Scene& scene, const Frame& frame, const ShadowResult& map,
+                                    const std::vector<ShadowMask>& reference, const ShadowOptions& options);
 
 /// Multiplies the colour of every shadowed pixel by `ambient` (red, green and blue; alpha kept).
 void darkenShadowed(Frame& frame, const std::vector<ShadowMask>& mask, double ambient);

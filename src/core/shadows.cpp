@@ -313,8 +313,9 @@ bool uniform3x3(int x, int y, int w, int h, auto&& value) {
 // than one face.
 class TexelEdges {
  public:
-  TexelEdges(const Frame& frame, const ShadowResult& map, const std::vector<ShadowMask>& reference)
-      : side_(uint32_t(map.lightCamera.width)) {
+  TexelEdges(const Frame& frame, const ShadowResult& map, const std::vector<ShadowMask>& reference,
+             const FrameBuffer<int32_t>& lightFaces)
+      : side_(uint32_t(map.lightCamera.width)), lightFaces_(lightFaces) {
     const bool faces = frame.faceId.size() == reference.size();
     for (size_t i = 0; i < reference.size(); ++i)
       if (map.texel[i] != kNoTexel)
@@ -342,6 +343,7 @@ class TexelEdges {
     for (int64_t y = std::max<int64_t>(0, ty - 1); y <= std::min<int64_t>(side_ - 1, ty + 1); ++y)
       for (int64_t x = std::max<int64_t>(0, tx - 1); x <= std::min<int64_t>(side_ - 1, tx + 1); ++x) {
         const uint32_t t = uint32_t(y) * side_ + uint32_t(x);
+        if (lightFaces_[t] != lightFaces_[texel]) return true;
         auto it = std::lower_bound(entries_.begin(), entries_.end(), t,
                                    [](const Entry& e, uint32_t value) { return e.texel < value; });
         if (it == entries_.end() || it->texel != t) continue;
@@ -361,6 +363,7 @@ class TexelEdges {
     bool severalFaces;
   };
   uint32_t side_;
+  const FrameBuffer<int32_t>& lightFaces_;
   std::vector<Entry> entries_;
 };
 
@@ -475,15 +478,21 @@ std::vector<ShadowMask> shadowRays(const Scene& scene, const Camera& view, const
   });
 }
 
-ShadowComparison compareShadowMasks(const Frame& frame, const ShadowResult& map,
-                                    const std::vector<ShadowMask>& reference) {
+ShadowComparison compareShadowMasks(const Scene& scene, const Frame& frame, const ShadowResult& map,
+                                    const std::vector<ShadowMask>& reference, const ShadowOptions& options) {
   const size_t n = size_t(frame.width) * size_t(frame.height);
   if (map.mask.size() != n || reference.size() != n || map.texel.size() != n)
     throw std::invalid_argument("compareShadowMasks: masks and frame differ in size");
   const bool faces = frame.faceId.size() == n;
   auto refAt = [&](int x, int y) { return reference[frame.index(x, y)]; };
   auto faceAt = [&](int x, int y) { return frame.faceId[frame.index(x, y)]; };
-  const TexelEdges texelEdges(frame, map, reference);
+  RenderOptions faceOptions;  // the map again, with the faces the light sees
+  faceOptions.algorithm = "zbuffer";
+  faceOptions.outputs = FrameOutputs::FaceIds;
+  faceOptions.depthFormat = options.depthFormat;
+  faceOptions.threads = options.threads;
+  const Frame lightFaces = render(scene, map.lightCamera, faceOptions);
+  const TexelEdges texelEdges(frame, map, reference, lightFaces.faceId);
   ShadowComparison c;
   for (int y = 0; y < frame.height; ++y)
     for (int x = 0; x < frame.width; ++x) {
@@ -535,7 +544,7 @@ ShadowComparison addShadows(const Scene& scene, const Camera& view, Frame& frame
   if (!verify) return comparison;
   Timer timer;
   const std::vector<ShadowMask> reference = shadowRays(scene, view, frame, light, options.threads);
-  comparison = compareShadowMasks(frame, result, reference);
+  comparison = compareShadowMasks(scene, frame, result, reference, options);
   st.addTime("shadow_verify", timer.ms());
   st.setDetail("shadow_wrong_pixels", comparison.wrong);
   st.setDetail("shadow_wrong_away_from_shadow_edges", comparison.wrongAwayFromShadowEdges);
