@@ -268,7 +268,7 @@ class MapTest {
     cam_.cameraRay(ix + 0.5, iy + 0.5, o, d);
     const dvec3 n = rotation_ * r.normal;
     const double nd = glm::dot(n, d);
-    if (!(nd < 0)) return p.z;  // the receiver faces the light: its normal runs against the light's rays
+    if (!(nd < 0)) return p.z;  // (a receiver facing the light has its normal against the light's rays)
     const double z = o.z + glm::dot(n, p - o) / nd;
     return std::isfinite(z) ? z : p.z;
   }
