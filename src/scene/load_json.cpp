@@ -158,7 +158,8 @@ void append(Scene& scene, const Scene& sub, const dmat4& worldFromMesh, const st
 
 // The line (from 1) of the first key "name" in `text`, or 0 when it is not found.
 size_t keyLine(std::string_view text, std::string_view name) {
-  const std::string quoted = "\"" + std::string(name) + "\"";
+  std::string quoted(1, '"');
+  quoted.append(name).push_back('"');
   for (size_t at = text.find(quoted); at != std::string_view::npos; at = text.find(quoted, at + 1)) {
     size_t after = at + quoted.size();
     while (after < text.size() && std::isspace(static_cast<unsigned char>(text[after]))) ++after;
@@ -171,7 +172,9 @@ size_t keyLine(std::string_view text, std::string_view name) {
 /// with errors "file:line: light: problem".
 Light readLight(const json& v, const std::string& path, std::string_view text) {
   const size_t line = keyLine(text, "light");
-  const std::string where = path + (line ? ":" + std::to_string(line) : "") + ": light";
+  std::string where = path;
+  if (line) where.append(":").append(std::to_string(line));
+  where.append(": light");
   auto fail = [&](const std::string& problem) -> Light { throw InputError(where + ": " + problem); };
   if (!v.is_object()) return fail("must be an object with 'direction' or 'position'");
   for (const auto& item : v.items())
