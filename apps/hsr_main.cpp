@@ -326,7 +326,34 @@ struct RenderFlags {
   std::string instanceIds, barycentric;  // attributes resolved from the ids (hsr/views.hpp)
   bool verify = false, quiet = false, json = false;
   std::vector<hsr::cli::OutputFlag> outputFlags;  // every output flag, checked as a set
+  // --shadows (docs/shadows.md): the light from the flags, else the scene's, else the default.
+  bool shadows = false;
+  std::string lightDir, lightPos;
+  hsr::ShadowOptions shadowOptions;
 };
+
+// The light --light-dir or --light-pos give (checked before the scene loads), if any.
+std::optional<hsr::Light> flagLight(const RenderFlags& f) {
+  if (f.lightDir.empty() && f.lightPos.empty()) return std::nullopt;
+  hsr::Light light;
+  light.kind = f.lightDir.empty() ? hsr::Light::Kind::Point : hsr::Light::Kind::Directional;
+  const char* flag = f.lightDir.empty() ? "--light-pos" : "--light-dir";
+  light.vector = parseVec3(flag, f.lightDir.empty() ? f.lightPos : f.lightDir);
+  hsr::checkLight(light, fmt::format("{} '{}'", flag, f.lightDir.empty() ? f.lightPos : f.lightDir));
+  return light;
+}
+
+void printShadowSummary(const hsr::Stats& s) {
+  auto count = [&s](std::string_view key) { return s.detailCount(key).value_or(0); };
+  fmt::print("  shadows: {}, map {}x{}, lit {} pixels, shadowed {} (of which facing away {})\n",
+             s.detailText("shadow_light"), count("shadow_map_size"), count("shadow_map_size"),
+             count("shadow_lit_pixels"), count("shadow_shadowed_pixels"), count("shadow_facing_away_pixels"));
+  if (s.detailCount("shadow_wrong_pixels"))
+    fmt::print("  shadow verify: {} wrong pixels against shadow rays, {} away from shadow edges, {} away from "
+               "shadow and face edges, {} unexplained (away from edges at the map's scale too)\n",
+               count("shadow_wrong_pixels"), count("shadow_wrong_away_from_shadow_edges"),
+               count("shadow_wrong_away_from_edges"), count("shadow_wrong_unexplained"));
+}
 
 // The human summary of one rendered frame.
 void printSummary(const Job& job, const hsr::Stats& s, double wallMs, const std::vector<std::string>& written) {
@@ -405,6 +432,11 @@ int runRender(const RenderFlags& f) {
   if (f.verify && !has(kept, hsr::FrameOutputs::IdsAndDepth))
     throw InputError("--verify compares face and triangle ids: --outputs " + f.view.outputs + " lacks face or triangle");
   checkAttributeOutputs(f, kept);
+  if (f.shadows && !has(kept, hsr::FrameOutputs::TriangleIds))
+    throw InputError("--shadows finds each pixel's point on its triangle: the outputs kept (" +
+                     hsr::frameOutputsName(kept) + ") have no triangle ids (add triangle)");
+  const std::optional<hsr::Light> lightFromFlags = flagLight(f);
+  if (f.shadows) hsr::checkShadowOptions(f.shadowOptions);
 
   if (!f.svg.empty()) hsr::checkSvgPath(f.svg);
 
@@ -416,6 +448,15 @@ int runRender(const RenderFlags& f) {
   job.options.countWrites = !f.overdrawImage.empty();
   auto start = std::chrono::steady_clock::now();
   hsr::Frame frame = hsr::render(job.scene, job.camera, job.options);
+  if (f.shadows) {
+    hsr::ShadowOptions shadowOptions = f.shadowOptions;
+    shadowOptions.depthFormat = job.options.depthFormat;
+    shadowOptions.threads = job.options.threads;
+    const hsr::Light light = lightFromFlags ? *lightFromFlags
+                             : job.scene.light ? *job.scene.light
+                                               : hsr::defaultLight(job.camera);
+    hsr::addShadows(job.scene, job.camera, frame, light, shadowOptions, f.verify);
+  }
   double wallMs = millisecondsSince(start);
 
   // All outputs or none: each is written to a temporary file, and all are renamed at the end.
@@ -445,8 +486,10 @@ int runRender(const RenderFlags& f) {
 
   if (f.json || f.stats == "-")  // --stats -: the statistics JSON on standard output
     fmt::print("{}\n", statsJson);
-  else if (!f.quiet)
+  else if (!f.quiet) {
     printSummary(job, frame.stats, wallMs, written);
+    if (f.shadows) printShadowSummary(frame.stats);
+  }
   return 0;
 }
 
@@ -494,6 +537,38 @@ Runner setupRender(CLI::App& cmd) {
   for (auto [flag, path] : outputFlags)
     f->outputFlags.push_back({flag, cmd.get_option(flag), path, std::string_view(flag) == "--stats"});
   cmd.add_flag("--verify", f->verify, "Also render the exact reference and count wrong/ambiguous pixels");
+  const char* shadows = "Shadows (docs/shadows.md)";
+  CLI::Option* shadowsFlag =
+      cmd.add_flag("--shadows", f->shadows,
+                   "Shadow-map the image: a depth map rendered by the z-buffer from the light, each visible pixel "
+                   "tested against it, shadowed pixels darkened in the colour output (with --verify, also checked "
+                   "against shadow rays)")
+          ->group(shadows);
+  CLI::Option* lightDirFlag =
+      cmd.add_option("--light-dir", f->lightDir,
+                     "A directional light: the direction its light travels (overrides the scene's light; default: "
+                     "the scene's, else a sun over the viewer's left shoulder)")
+          ->type_name("X,Y,Z")
+          ->needs(shadowsFlag)
+          ->group(shadows);
+  cmd.add_option("--light-pos", f->lightPos, "A point light at this position, outside the scene's bounds")
+      ->type_name("X,Y,Z")
+      ->needs(shadowsFlag)
+      ->excludes(lightDirFlag)
+      ->group(shadows);
+  cmd.add_option("--shadow-map-size", f->shadowOptions.mapSize,
+                 fmt::format("Shadow map side in texels, {} to {}", hsr::kMinShadowMapSize, hsr::kMaxShadowMapSize))
+      ->type_name("N")
+      ->needs(shadowsFlag)
+      ->capture_default_str()
+      ->group(shadows);
+  cmd.add_option("--shadow-bias", f->shadowOptions.bias,
+                 "Depth bias in texel widths at the receiver (besides the depth format's rounding): an occluder "
+                 "nearer the light than the receiver's plane by less than this casts no shadow")
+      ->type_name("TEXELS")
+      ->needs(shadowsFlag)
+      ->capture_default_str()
+      ->group(shadows);
   cmd.add_flag("--json", f->json, "Print the statistics JSON to stdout instead of the summary");
   cmd.add_flag("-q,--quiet", f->quiet, "Print nothing on success");
 
@@ -504,7 +579,8 @@ Runner setupRender(CLI::App& cmd) {
       "  hsr render builtin:painter-cycle --algorithm zbuffer --param raster=halfspace --overdraw-image o.png\n"
       "  hsr render builtin:cubes -o cubes.png\n"
       "  hsr render model.obj --camera cam.json --size 1920x1080 --ids ids.png --depth depth.npy --verify\n"
-      "  hsr render scene.json --eye 4,3,5 --target 0,0,0 --depth-format u16:z --depth-image z.png";
+      "  hsr render scene.json --eye 4,3,5 --target 0,0,0 --depth-format u16:z --depth-image z.png\n"
+      "  hsr render builtin:city --shadows --light-dir 1,-2,0.5 --shadow-map-size 4096 -o city.png --verify";
   cmd.footer(footer);
   return [f] { return runRender(*f); };
 }

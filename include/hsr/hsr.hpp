@@ -9,6 +9,7 @@
 #include <hsr/io.hpp>
 #include <hsr/render.hpp>
 #include <hsr/scene.hpp>
+#include <hsr/shadows.hpp>
 #include <hsr/verify.hpp>
 #include <hsr/orbit.hpp>
 #include <hsr/occlusion.hpp>

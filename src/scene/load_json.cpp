@@ -1,7 +1,8 @@
 // Scene JSON: a list of meshes (files or built-in scenes), each placed by a transform and
-// optionally recoloured, plus an optional camera. Produces an unfinalized Scene for
+// optionally recoloured, plus an optional camera and light. Produces an unfinalized Scene for
 // loadScene() (load.cpp); the format is documented in docs/scene-json.md.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <glm/gtc/matrix_transform.hpp>
@@ -155,6 +156,49 @@ void append(Scene& scene, const Scene& sub, const dmat4& worldFromMesh, const st
   scene.problems.notes.insert(scene.problems.notes.end(), sub.problems.notes.begin(), sub.problems.notes.end());
 }
 
+// The line (from 1) of the first key "name" in `text`, or 0 when it is not found.
+size_t keyLine(std::string_view text, std::string_view name) {
+  std::string quoted(1, '"');
+  quoted.append(name).push_back('"');
+  for (size_t at = text.find(quoted); at != std::string_view::npos; at = text.find(quoted, at + 1)) {
+    size_t after = at + quoted.size();
+    while (after < text.size() && std::isspace(static_cast<unsigned char>(text[after]))) ++after;
+    if (after < text.size() && text[after] == ':') return 1 + size_t(std::count(text.begin(), text.begin() + long(at), '\n'));
+  }
+  return 0;
+}
+
+/// "light": {"direction": [x, y, z]} (the direction the light travels) or {"position": [x, y, z]},
+/// with errors "file:line: light: problem".
+Light readLight(const json& v, const std::string& path, std::string_view text) {
+  const size_t line = keyLine(text, "light");
+  std::string where = path;
+  if (line) where.append(":").append(std::to_string(line));
+  where.append(": light");
+  auto fail = [&](const std::string& problem) -> Light { throw InputError(where + ": " + problem); };
+  if (!v.is_object()) return fail("must be an object with 'direction' or 'position'");
+  for (const auto& item : v.items())
+    if (item.key() != "direction" && item.key() != "position")
+      return fail("unknown key " + quote(item.key()) + " (expected 'direction' or 'position')");
+  if (v.contains("direction") == v.contains("position")) return fail("needs exactly one of 'direction' and 'position'");
+  const char* key = v.contains("direction") ? "direction" : "position";
+  const json& a = v.at(key);
+  if (!a.is_array() || a.size() != 3) return fail(std::string(key) + " must be an array of 3 numbers");
+  Light light;
+  light.kind = v.contains("direction") ? Light::Kind::Directional : Light::Kind::Point;
+  for (size_t i = 0; i < 3; ++i) {
+    if (!a[i].is_number()) return fail(std::string(key) + " must be an array of 3 numbers");
+    light.vector[int(i)] = a[i].get<double>();
+  }
+  if (!std::isfinite(light.vector.x) || !std::isfinite(light.vector.y) || !std::isfinite(light.vector.z))
+    return fail(std::string(key) + " must be finite");
+  if (std::max({std::abs(light.vector.x), std::abs(light.vector.y), std::abs(light.vector.z)}) > 1e30)
+    return fail(std::string(key) + " has a coordinate beyond 1e30 in magnitude");
+  if (light.kind == Light::Kind::Directional && light.vector == dvec3(0.0))
+    return fail("direction must not be zero (it is the direction the light travels)");
+  return light;
+}
+
 }  // namespace
 
 Scene loadSceneJson(const std::string& path, std::string_view bytes, LoadContext& context) {
@@ -179,8 +223,8 @@ Scene loadSceneJson(const std::string& path, std::string_view bytes, LoadContext
   }
   if (!root.is_object()) throw InputError(path + ": a scene file must be a JSON object");
   for (const auto& item : root.items())
-    if (item.key() != "meshes" && item.key() != "camera")
-      throw InputError(path + ": unknown key " + quote(item.key()) + " (expected 'meshes' and 'camera')");
+    if (item.key() != "meshes" && item.key() != "camera" && item.key() != "light")
+      throw InputError(path + ": unknown key " + quote(item.key()) + " (expected 'meshes', 'camera' and 'light')");
   if (!root.contains("meshes") || !root.at("meshes").is_array() || root.at("meshes").empty())
     throw InputError(path + ": 'meshes' must be a non-empty array");
 
@@ -219,6 +263,7 @@ Scene loadSceneJson(const std::string& path, std::string_view bytes, LoadContext
     if (!root.at("camera").is_object()) throw InputError(path + ": 'camera' must be an object");
     scene.camera = parseCameraJson(root.at("camera").dump(), path);
   }
+  if (root.contains("light")) scene.light = readLight(root.at("light"), path, bytes);
   return scene;
 }
 

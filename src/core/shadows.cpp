@@ -1,0 +1,558 @@
+// Shadow mapping and its exact reference (include/hsr/shadows.hpp, docs/shadows.md): the light's
+// camera, the map rendered by the z-buffer from it, each visible pixel tested against the map or
+// by a shadow ray through the ray caster's BVH. Rows of the view run in parallel, each writing
+// only its own pixels, so any thread count gives the same mask.
+#include <hsr/shadows.hpp>
+
+#include "algorithms/bvh.hpp"
+#include "core/parallel.hpp"
+#include "core/timer.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+
+namespace hsr {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// A point light farther out than this leaves the map's eye depths (floats) no precision.
+constexpr double kMaxLightCoordinate = 1e30;
+
+bool finite(const dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// v / |v|, scaled first so that tiny and huge (finite, non-zero) vectors normalize too.
+dvec3 unit(const dvec3& v) {
+  const double m = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+  return glm::normalize(v / m);
+}
+
+std::string formatVec(const dvec3& v) {
+  char text[96];
+  std::snprintf(text, sizeof text, "%g,%g,%g", v.x, v.y, v.z);
+  return text;
+}
+
+// --- The light's camera ------------------------------------------------------------------------
+
+// An orthonormal frame whose third axis is `forward`: rows of a camera-from-world rotation in
+// OpenCV axes (x right, y down, z forward). The up hint is the world axis least along forward.
+void lightAxes(const dvec3& forward, dvec3 rows[3]) {
+  const dvec3 f = unit(forward);
+  const dvec3 a = glm::abs(f);
+  const dvec3 up = a.x <= a.y && a.x <= a.z ? dvec3(1, 0, 0) : a.y <= a.z ? dvec3(0, 1, 0) : dvec3(0, 0, 1);
+  const dvec3 s = glm::normalize(glm::cross(f, up));
+  const dvec3 u = glm::cross(s, f);
+  rows[0] = s;
+  rows[1] = -u;
+  rows[2] = f;
+}
+
+std::array<dvec3, 8> corners(const Bounds3& b) {
+  std::array<dvec3, 8> c;
+  for (int i = 0; i < 8; ++i) c[size_t(i)] = {i & 1 ? b.hi.x : b.lo.x, i & 2 ? b.hi.y : b.lo.y, i & 4 ? b.hi.z : b.lo.z};
+  return c;
+}
+
+dmat4 cameraFromWorld(const dvec3 rows[3], const dvec3& origin) {
+  dmat4 m(1.0);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) m[c][r] = rows[r][c];
+    m[3][r] = -glm::dot(rows[r], origin);
+  }
+  return m;
+}
+
+// A range [lo, hi] widened to at least `least` (a flat scene seen edge-on still gets a map).
+void widen(double& lo, double& hi, double least) {
+  if (hi - lo >= least) return;
+  const double mid = 0.5 * (lo + hi);
+  lo = mid - 0.5 * least;
+  hi = mid + 0.5 * least;
+}
+
+// Orthographic along the direction the light travels, the bounds' projection filling the map but
+// a texel at each side.
+Camera directionalCamera(const Bounds3& bounds, const dvec3& direction, int n) {
+  dvec3 rows[3];
+  lightAxes(direction, rows);
+  const double diag = glm::length(bounds.hi - bounds.lo);
+  dvec3 lo(kInf), hi(-kInf);
+  for (const dvec3& c : corners(bounds))
+    for (int r = 0; r < 3; ++r) {
+      lo[r] = std::min(lo[r], glm::dot(rows[r], c));
+      hi[r] = std::max(hi[r], glm::dot(rows[r], c));
+    }
+  for (int r = 0; r < 3; ++r) widen(lo[r], hi[r], 1e-9 * diag);
+  const double margin = 0.01 * (hi.z - lo.z) + 1e-6 * diag;  // depth room in front and behind
+
+  Camera cam;
+  cam.width = cam.height = n;
+  cam.orthographic = true;
+  cam.cameraFromWorld = cameraFromWorld(rows, dvec3(0.0));
+  cam.cameraFromWorld[3][2] = margin - lo.z;  // z = forward . p - lo.z + margin
+  const double kx = (n - 2) / (hi.x - lo.x), ky = (n - 2) / (hi.y - lo.y);
+  dmat4 pix(0.0);  // pix[col][row]
+  pix[0][0] = kx;
+  pix[3][0] = 1 - kx * lo.x;
+  pix[1][1] = ky;
+  pix[3][1] = 1 - ky * lo.y;
+  pix[2][2] = 1;
+  pix[3][3] = 1;
+  cam.pixelFromCamera = pix;
+  cam.near = 0.5 * margin;
+  cam.far = hi.z - lo.z + 1.5 * margin;
+  return cam;
+}
+
+// The largest tangent a point light's view may need: a 160-degree view.
+constexpr double kMaxTangent = 5.6712818196177066;  // tan(80 degrees)
+
+struct Frustum {
+  dvec3 rows[3];
+  dvec3 lo{kInf}, hi{-kInf};  // tangents x/z, y/z and depth z of the corners
+  bool fits = false;
+  double widest() const { return std::max({-lo.x, hi.x, -lo.y, hi.y}); }
+};
+
+Frustum frustumAlong(const Bounds3& bounds, const dvec3& position, const dvec3& forward) {
+  Frustum fr;
+  if (!(glm::length(forward) > 0) || !finite(forward)) return fr;
+  lightAxes(forward, fr.rows);
+  for (const dvec3& c : corners(bounds)) {
+    const dvec3 q{glm::dot(fr.rows[0], c - position), glm::dot(fr.rows[1], c - position),
+                  glm::dot(fr.rows[2], c - position)};
+    if (!(q.z > 0)) return fr;
+    fr.lo = glm::min(fr.lo, dvec3(q.x / q.z, q.y / q.z, q.z));
+    fr.hi = glm::max(fr.hi, dvec3(q.x / q.z, q.y / q.z, q.z));
+  }
+  fr.fits = fr.widest() <= kMaxTangent && fr.lo.z > 1e-6 * fr.hi.z;
+  return fr;
+}
+
+// Perspective from a point light, looking toward the bounds (at their centre, or along the mean
+// direction of their corners when that frames them more tightly).
+Camera pointCamera(const Bounds3& bounds, const dvec3& position, int n) {
+  if (glm::all(glm::greaterThanEqual(position, bounds.lo)) && glm::all(glm::lessThanEqual(position, bounds.hi)))
+    throw InputError("light position " + formatVec(position) +
+                     " lies inside the scene's bounds: one perspective shadow map cannot see the whole scene "
+                     "from there (place the light outside, or use a directional light)");
+  dvec3 mean(0.0);
+  for (const dvec3& c : corners(bounds)) mean += glm::normalize(c - position);
+  Frustum fr = frustumAlong(bounds, position, bounds.center() - position);
+  const Frustum other = frustumAlong(bounds, position, mean);
+  if (other.fits && (!fr.fits || other.widest() < fr.widest())) fr = other;
+  if (!fr.fits)
+    throw InputError("light position " + formatVec(position) +
+                     " is so close to the scene that its bounds do not fit in a 160-degree view (move the light "
+                     "farther away, or use a directional light)");
+  widen(fr.lo.x, fr.hi.x, 1e-9);
+  widen(fr.lo.y, fr.hi.y, 1e-9);
+
+  Camera cam;
+  cam.width = cam.height = n;
+  cam.orthographic = false;
+  cam.cameraFromWorld = cameraFromWorld(fr.rows, position);
+  const double kx = (n - 2) / (fr.hi.x - fr.lo.x), ky = (n - 2) / (fr.hi.y - fr.lo.y);
+  dmat4 pix(0.0);  // hx = kx x + (1 - kx lo.x) z, w = z
+  pix[0][0] = kx;
+  pix[2][0] = 1 - kx * fr.lo.x;
+  pix[1][1] = ky;
+  pix[2][1] = 1 - ky * fr.lo.y;
+  pix[2][2] = 1;
+  pix[2][3] = 1;
+  cam.pixelFromCamera = pix;
+  cam.near = 0.99 * fr.lo.z;
+  cam.far = 1.01 * fr.hi.z;
+  return cam;
+}
+
+// --- Visible points ----------------------------------------------------------------------------
+
+// The surface a view pixel shows: its world point and the unit normal of its plane turned toward
+// the viewer.
+struct Receiver {
+  dvec3 point, normal;
+};
+
+class ReceiverFinder {
+ public:
+  ReceiverFinder(const Scene& scene, const Camera& view, const Frame& frame)
+      : scene_(scene), view_(view), frame_(frame), worldFromCamera_(glm::inverse(view.cameraFromWorld)) {
+    if (frame.triangleId.size() != size_t(frame.width) * size_t(frame.height))
+      throw InputError("shadows: the frame has no triangle ids (render it with triangle ids)");
+  }
+
+  // False for a background pixel.
+  bool find(int x, int y, Receiver& r) const {
+    const size_t idx = frame_.index(x, y);
+    const int32_t tri = frame_.triangleId[idx];
+    if (tri < 0) return false;
+    dvec3 o, d;
+    view_.cameraRay(x + 0.5, y + 0.5, o, d);
+    o = dvec3(worldFromCamera_ * dvec4(o, 1.0));
+    d = dmat3(worldFromCamera_) * d;
+    const Triangle& t = scene_.triangles[size_t(tri)];
+    const dvec3& v0 = scene_.positions[t.v[0]];
+    dvec3 n = glm::cross(scene_.positions[t.v[1]] - v0, scene_.positions[t.v[2]] - v0);
+    const double nd = glm::dot(n, d);
+    // The view ray's parameter is the eye depth (dir.z == 1): the frame's depth where the ray
+    // runs along the plane.
+    const double s = nd != 0 ? glm::dot(n, v0 - o) / nd : double(frame_.depth[idx]);
+    r.point = o + (std::isfinite(s) ? s : double(frame_.depth[idx])) * d;
+    const double len = glm::length(n);
+    n = len > 0 ? n / len : -glm::normalize(d);
+    r.normal = glm::dot(n, d) > 0 ? -n : n;
+    return true;
+  }
+
+ private:
+  const Scene& scene_;
+  const Camera& view_;
+  const Frame& frame_;
+  dmat4 worldFromCamera_;
+};
+
+// The direction from `p` toward the light (not normalized for a point light: its length is the
+// distance to it).
+dvec3 towardLight(const Light& light, const dvec3& p) {
+  return light.kind == Light::Kind::Directional ? -unit(light.vector) : light.vector - p;
+}
+
+// The facing rule: the side the viewer sees faces the light.
+bool facesLight(const Receiver& r, const Light& light) { return glm::dot(r.normal, towardLight(light, r.point)) > 0; }
+
+// --- Testing against the map -------------------------------------------------------------------
+
+class MapTest {
+ public:
+  MapTest(const Camera& lightCam, const FrameBuffer<float>& depth, DepthFormat format, double bias)
+      : cam_(lightCam), depth_(depth), format_(format), rotation_(dmat3(lightCam.cameraFromWorld)), bias_(bias) {
+    const dmat4& M = lightCam.pixelFromCamera;
+    texelPerUnit_ = std::min(M[0][0], M[1][1]);  // the wider texel side, per unit of x/z or x
+  }
+
+  // Whether the map puts something nearer the light than the receiver's plane at the centre of
+  // the texel the receiver falls in, by more than the bias.
+  bool shadowed(const Receiver& r, uint32_t& texel) const {
+    const dvec3 p = cam_.toCamera(r.point);
+    const dvec4 h = cam_.pixelFromCamera * dvec4(p, 1.0);
+    const int n = cam_.width;
+    const int ix = std::clamp(int(std::floor(h.x / h.w)), 0, n - 1);
+    const int iy = std::clamp(int(std::floor(h.y / h.w)), 0, n - 1);
+    texel = uint32_t(iy) * uint32_t(n) + uint32_t(ix);
+    const double mapDepth = depth_[texel];
+    const double texelWidth = (cam_.orthographic ? 1.0 : p.z) / texelPerUnit_;
+    return mapDepth < planeDepthAtTexel(r, p, ix, iy) - bias_ * texelWidth - rounding(p.z);
+  }
+
+ private:
+  // What the map's depth may be off by at eye depth z: two steps of its storage there, mapped
+  // back to eye depth, and the rounding of eye depth to float.
+  double rounding(double z) const {
+    const double n = cam_.near, f = cam_.far, h = 1e-6 * (f - n);
+    const double lo = std::max(n, z - h), hi = std::min(f, z + h);
+    const double slope = std::abs(format_.map(hi, n, f, cam_.orthographic) - format_.map(lo, n, f, cam_.orthographic)) /
+                         (hi - lo);
+    const double step = format_.resolution(format_.map(z, n, f, cam_.orthographic));
+    return (slope > 0 ? 2 * step / slope : 0) + std::abs(z) * 0x1p-22;
+  }
+
+  // The light-space depth of the receiver's plane along the light ray through texel (ix, iy)'s
+  // centre; the receiver's own depth where that ray runs along or away from the plane.
+  double planeDepthAtTexel(const Receiver& r, const dvec3& p, int ix, int iy) const {
+    dvec3 o, d;
+    cam_.cameraRay(ix + 0.5, iy + 0.5, o, d);
+    const dvec3 n = rotation_ * r.normal;
+    const double nd = glm::dot(n, d);
+    if (!(nd < 0)) return p.z;  // (a receiver facing the light has its normal against the light's rays)
+    const double z = o.z + glm::dot(n, p - o) / nd;
+    return std::isfinite(z) ? z : p.z;
+  }
+
+  const Camera& cam_;
+  const FrameBuffer<float>& depth_;
+  DepthFormat format_;
+  dmat3 rotation_;
+  double bias_;
+  double texelPerUnit_;
+};
+
+template <class Classify>
+std::vector<ShadowMask> classifyPixels(const Frame& frame, int threads, Classify&& classify) {
+  std::vector<ShadowMask> mask(size_t(frame.width) * size_t(frame.height), ShadowMask::Background);
+  parallelFor(0, size_t(frame.height), resolveThreads(threads), [&](size_t y) {
+    for (int x = 0; x < frame.width; ++x) mask[frame.index(x, int(y))] = classify(x, int(y));
+  });
+  return mask;
+}
+
+// A relative 1e-9 of the scene's size and distance from the origin: far above the rounding of a
+// reconstructed point (about 1e-16 of it), far below any gap a scene means.
+double selfHitOffset(const Bounds3& b) {
+  if (b.empty()) return 0;
+  const double extent = glm::length(b.hi - b.lo);
+  const double reach = std::max(glm::length(b.lo), glm::length(b.hi));
+  return 1e-9 * (extent + reach);
+}
+
+bool uniform3x3(int x, int y, int w, int h, auto&& value) {
+  const auto centre = value(x, y);
+  for (int yy = std::max(0, y - 1); yy <= std::min(h - 1, y + 1); ++yy)
+    for (int xx = std::max(0, x - 1); xx <= std::min(w - 1, x + 1); ++xx)
+      if (!(value(xx, yy) == centre)) return false;
+  return true;
+}
+
+// Per texel of the map that some receiver falls in: which reference verdicts and faces its
+// receivers have; a texel is at an edge when its 3x3 neighbourhood holds both lit and shadowed
+// receivers (a shadow boundary passes within a texel as the light sees it) or receivers of more
+// than one face.
+class TexelEdges {
+ public:
+  TexelEdges(const Frame& frame, const ShadowResult& map, const std::vector<ShadowMask>& reference,
+             const FrameBuffer<int32_t>& lightFaces)
+      : side_(uint32_t(map.lightCamera.width)), lightFaces_(lightFaces) {
+    const bool faces = frame.faceId.size() == reference.size();
+    for (size_t i = 0; i < reference.size(); ++i)
+      if (map.texel[i] != kNoTexel)
+        entries_.push_back({map.texel[i], faces ? frame.faceId[i] : 0, uint8_t(1u << uint8_t(reference[i])), false});
+    std::sort(entries_.begin(), entries_.end(), [](const Entry& a, const Entry& b) { return a.texel < b.texel; });
+    // One entry per texel: its verdicts ORed, and whether its receivers show several faces.
+    size_t out = 0;
+    for (size_t i = 0; i < entries_.size(); ++i) {
+      if (out > 0 && entries_[out - 1].texel == entries_[i].texel) {
+        Entry& e = entries_[out - 1];
+        e.verdicts |= entries_[i].verdicts;
+        e.severalFaces = e.severalFaces || e.face != entries_[i].face;
+      } else {
+        entries_[out++] = entries_[i];
+      }
+    }
+    entries_.resize(out);
+  }
+
+  bool nearEdge(uint32_t texel) const {
+    if (texel == kNoTexel) return false;
+    const int64_t tx = texel % side_, ty = texel / side_;
+    uint8_t verdicts = 0;
+    int32_t face = -2;
+    for (int64_t y = std::max<int64_t>(0, ty - 1); y <= std::min<int64_t>(side_ - 1, ty + 1); ++y)
+      for (int64_t x = std::max<int64_t>(0, tx - 1); x <= std::min<int64_t>(side_ - 1, tx + 1); ++x) {
+        const uint32_t t = uint32_t(y) * side_ + uint32_t(x);
+        if (lightFaces_[t] != lightFaces_[texel]) return true;
+        auto it = std::lower_bound(entries_.begin(), entries_.end(), t,
+                                   [](const Entry& e, uint32_t value) { return e.texel < value; });
+        if (it == entries_.end() || it->texel != t) continue;
+        verdicts |= it->verdicts;
+        if (it->severalFaces || (face != -2 && it->face != face)) return true;
+        face = it->face;
+      }
+    const uint8_t litAndShadowed = uint8_t(1u << uint8_t(ShadowMask::Lit)) | uint8_t(1u << uint8_t(ShadowMask::Shadowed));
+    return (verdicts & litAndShadowed) == litAndShadowed;
+  }
+
+ private:
+  struct Entry {
+    uint32_t texel;
+    int32_t face;
+    uint8_t verdicts;
+    bool severalFaces;
+  };
+  uint32_t side_;
+  const FrameBuffer<int32_t>& lightFaces_;
+  std::vector<Entry> entries_;
+};
+
+}  // namespace
+
+void checkLight(const Light& light, const std::string& what) {
+  if (!finite(light.vector)) throw InputError(what + ": the light's " +
+                                              (light.kind == Light::Kind::Directional ? "direction" : "position") +
+                                              " must be finite");
+  if (light.kind == Light::Kind::Point && glm::any(glm::greaterThan(glm::abs(light.vector), dvec3(kMaxLightCoordinate))))
+    throw InputError(what + ": the light's position has a coordinate beyond 1e30 in magnitude");
+  if (light.kind == Light::Kind::Directional && light.vector == dvec3(0.0))
+    throw InputError(what + ": the light's direction is zero");
+}
+
+Light defaultLight(const Camera& view) {
+  const dvec3 travelInView = glm::normalize(dvec3(0.5, 0.8, 0.6));  // right, down, away
+  Light light;
+  light.kind = Light::Kind::Directional;
+  light.vector = glm::transpose(dmat3(view.cameraFromWorld)) * travelInView;
+  return light;
+}
+
+std::string describeLight(const Light& light) {
+  return std::string(light.kind == Light::Kind::Directional ? "directional " : "point ") + formatVec(light.vector);
+}
+
+Camera lightCamera(const Bounds3& sceneBounds, const Light& light, int mapSize) {
+  checkLight(light, "shadows");
+  if (mapSize < kMinShadowMapSize || mapSize > kMaxShadowMapSize)
+    throw InputError("--shadow-map-size " + std::to_string(mapSize) + ": must be " +
+                     std::to_string(kMinShadowMapSize) + " to " + std::to_string(kMaxShadowMapSize));
+  if (sceneBounds.empty() || !finite(sceneBounds.lo) || !finite(sceneBounds.hi))
+    throw InputError("shadows: the scene has no geometry to frame a shadow map around");
+  if (!(glm::length(sceneBounds.hi - sceneBounds.lo) > 0))
+    throw InputError("shadows: the scene is a single point: no shadow map can be framed around it");
+  return light.kind == Light::Kind::Directional ? directionalCamera(sceneBounds, light.vector, mapSize)
+                                                : pointCamera(sceneBounds, light.vector, mapSize);
+}
+
+void checkShadowOptions(const ShadowOptions& o) {
+  if (o.mapSize < kMinShadowMapSize || o.mapSize > kMaxShadowMapSize)
+    throw InputError("--shadow-map-size " + std::to_string(o.mapSize) + ": must be " +
+                     std::to_string(kMinShadowMapSize) + " to " + std::to_string(kMaxShadowMapSize));
+  if (!std::isfinite(o.bias) || o.bias < 0)
+    throw InputError("--shadow-bias: must be a finite number of texels, 0 or more");
+  if (!std::isfinite(o.ambient) || o.ambient < 0 || o.ambient > 1)
+    throw InputError("shadows: the ambient factor must be in [0, 1]");
+}
+
+ShadowResult shadowMap(const Scene& scene, const Camera& view, const Frame& frame, const Light& light,
+                       const ShadowOptions& options) {
+  checkShadowOptions(options);
+  const ReceiverFinder finder(scene, view, frame);
+  ShadowResult result;
+  result.lightCamera = lightCamera(scene.bounds(), light, options.mapSize);
+
+  // The map: the same z-buffer from the light, depth only.
+  Timer timer;
+  RenderOptions mapOptions;
+  mapOptions.algorithm = "zbuffer";
+  mapOptions.outputs = FrameOutputs::DepthOnly;
+  mapOptions.depthFormat = options.depthFormat;
+  mapOptions.cull = Cull::None;
+  mapOptions.threads = options.threads;
+  const Frame map = render(scene, result.lightCamera, mapOptions);
+  result.mapMs = timer.lap();
+  result.mapBytes = map.stats.memory_bytes ? map.stats.memory_bytes : map.depth.size() * sizeof(float);
+
+  const MapTest test(result.lightCamera, map.depth, options.depthFormat, options.bias);
+  result.texel.assign(size_t(frame.width) * size_t(frame.height), kNoTexel);
+  result.mask = classifyPixels(frame, options.threads, [&](int x, int y) {
+    Receiver r;
+    if (!finder.find(x, y, r)) return ShadowMask::Background;
+    const bool lit = !test.shadowed(r, result.texel[frame.index(x, y)]) && facesLight(r, light);
+    return lit ? ShadowMask::Lit : ShadowMask::Shadowed;
+  });
+  result.testMs = timer.lap();
+
+  // Counted apart from the parallel pass (the facing rule again: cheap, and keeps the rows free
+  // of shared counters).
+  for (int y = 0; y < frame.height; ++y)
+    for (int x = 0; x < frame.width; ++x) {
+      const ShadowMask m = result.mask[frame.index(x, y)];
+      if (m == ShadowMask::Lit) ++result.lit;
+      if (m != ShadowMask::Shadowed) continue;
+      ++result.shadowed;
+      Receiver r;
+      if (finder.find(x, y, r) && !facesLight(r, light)) ++result.facingAway;
+    }
+  return result;
+}
+
+std::vector<ShadowMask> shadowRays(const Scene& scene, const Camera& view, const Frame& frame, const Light& light,
+                                   int threads) {
+  checkLight(light, "shadows");
+  const ReceiverFinder finder(scene, view, frame);
+  const Camera world;  // identity: the BVH in world space
+  const algo::CameraSpaceBvh bvh(scene, world);
+  const double offset = selfHitOffset(scene.bounds());
+  return classifyPixels(frame, threads, [&](int x, int y) {
+    Receiver r;
+    if (!finder.find(x, y, r)) return ShadowMask::Background;
+    if (!facesLight(r, light)) return ShadowMask::Shadowed;
+    const dvec3 origin = r.point + offset * r.normal;
+    const dvec3 dir = towardLight(light, origin);
+    // A directional light is infinitely far; a point light at t = 1 along origin + t dir.
+    const double tMax = light.kind == Light::Kind::Directional ? kInf : 1.0;
+    algo::TraceCounters counters;
+    const algo::RayHit hit = bvh.closestHit(algo::WatertightRay(origin, dir), 0.0, tMax, Cull::None, counters);
+    return hit.found() ? ShadowMask::Shadowed : ShadowMask::Lit;
+  });
+}
+
+ShadowComparison compareShadowMasks(const Scene& scene, const Frame& frame, const ShadowResult& map,
+                                    const std::vector<ShadowMask>& reference, const ShadowOptions& options) {
+  const size_t n = size_t(frame.width) * size_t(frame.height);
+  if (map.mask.size() != n || reference.size() != n || map.texel.size() != n)
+    throw std::invalid_argument("compareShadowMasks: masks and frame differ in size");
+  const bool faces = frame.faceId.size() == n;
+  auto refAt = [&](int x, int y) { return reference[frame.index(x, y)]; };
+  auto faceAt = [&](int x, int y) { return frame.faceId[frame.index(x, y)]; };
+  RenderOptions faceOptions;  // the map again, with the faces the light sees
+  faceOptions.algorithm = "zbuffer";
+  faceOptions.outputs = FrameOutputs::FaceIds;
+  faceOptions.depthFormat = options.depthFormat;
+  faceOptions.threads = options.threads;
+  const Frame lightFaces = render(scene, map.lightCamera, faceOptions);
+  const TexelEdges texelEdges(frame, map, reference, lightFaces.faceId);
+  ShadowComparison c;
+  for (int y = 0; y < frame.height; ++y)
+    for (int x = 0; x < frame.width; ++x) {
+      const size_t i = frame.index(x, y);
+      const bool shadowEdge = !uniform3x3(x, y, frame.width, frame.height, refAt);
+      const bool faceEdge = faces && !uniform3x3(x, y, frame.width, frame.height, faceAt);
+      c.shadowEdgePixels += shadowEdge;
+      c.faceEdgePixels += faceEdge;
+      if (map.mask[i] == reference[i]) continue;
+      ++c.wrong;
+      if (shadowEdge) continue;
+      ++c.wrongAwayFromShadowEdges;
+      if (faceEdge) continue;
+      ++c.wrongAwayFromEdges;
+      if (c.firstWrongAwayFromEdges.size() < 16) c.firstWrongAwayFromEdges.emplace_back(x, y);
+      if (texelEdges.nearEdge(map.texel[i])) continue;
+      ++c.wrongUnexplained;
+      if (c.firstUnexplained.size() < 16) c.firstUnexplained.emplace_back(x, y);
+    }
+  return c;
+}
+
+void darkenShadowed(Frame& frame, const std::vector<ShadowMask>& mask, double ambient) {
+  if (frame.color.size() != mask.size()) return;
+  auto scale = [ambient](uint8_t c) { return uint8_t(std::lround(double(c) * ambient)); };
+  for (size_t i = 0; i < mask.size(); ++i) {
+    if (mask[i] != ShadowMask::Shadowed) continue;
+    Rgba8& c = frame.color[i];
+    c = {scale(c.r), scale(c.g), scale(c.b), c.a};
+  }
+}
+
+ShadowComparison addShadows(const Scene& scene, const Camera& view, Frame& frame, const Light& light,
+                            const ShadowOptions& options, bool verify) {
+  ShadowResult result = shadowMap(scene, view, frame, light, options);
+  darkenShadowed(frame, result.mask, options.ambient);
+  Stats& st = frame.stats;
+  st.addTime("shadow_map", result.mapMs);
+  st.addTime("shadow_test", result.testMs);
+  st.addMemory("shadow_map", result.mapBytes);
+  st.addMemory("shadow_mask", result.mask.size() * sizeof(ShadowMask));
+  st.setDetail("shadow_light", describeLight(light));
+  st.setDetail("shadow_map_size", uint64_t(options.mapSize));
+  st.setDetail("shadow_bias_texels", options.bias);
+  st.setDetail("shadow_lit_pixels", result.lit);
+  st.setDetail("shadow_shadowed_pixels", result.shadowed);
+  st.setDetail("shadow_facing_away_pixels", result.facingAway);
+  ShadowComparison comparison;
+  if (!verify) return comparison;
+  Timer timer;
+  const std::vector<ShadowMask> reference = shadowRays(scene, view, frame, light, options.threads);
+  comparison = compareShadowMasks(scene, frame, result, reference, options);
+  st.addTime("shadow_verify", timer.ms());
+  st.setDetail("shadow_wrong_pixels", comparison.wrong);
+  st.setDetail("shadow_wrong_away_from_shadow_edges", comparison.wrongAwayFromShadowEdges);
+  st.setDetail("shadow_wrong_away_from_edges", comparison.wrongAwayFromEdges);
+  st.setDetail("shadow_wrong_unexplained", comparison.wrongUnexplained);
+  st.setDetail("shadow_edge_pixels", comparison.shadowEdgePixels);
+  st.setDetail("shadow_face_edge_pixels", comparison.faceEdgePixels);
+  return comparison;
+}
+
+}  // namespace hsr
