@@ -246,6 +246,19 @@ def run_scene(hsr, out, name, polys, w, h):
     return rows
 
 
+def matplotlib_start_s():
+    """What a new process pays before matplotlib's 3D SVG export can start: Python and the imports
+    (the median of 3), to set beside hsr's whole command, which is a new process too."""
+    code = ("import matplotlib; matplotlib.use('svg'); import matplotlib.pyplot; "
+            "from mpl_toolkits.mplot3d.art3d import Poly3DCollection; import numpy")
+    times = []
+    for _ in range(3):
+        start = time.perf_counter()
+        subprocess.run([sys.executable, "-c", code], check=True)
+        times.append(time.perf_counter() - start)
+    return sorted(times)[1]
+
+
 def main():
     if len(sys.argv) < 3:
         sys.exit(__doc__)
@@ -257,6 +270,8 @@ def main():
     for name, make in SCENES:
         for r in run_scene(hsr, out, name, make(), w, h):
             print("| %s | %d | %s | %.3f | %.3f | %.1f | %d | %d |" % (r[0], r[1], r[2], r[3], r[4], r[5] / 1e3, r[6], r[7]))
+    print("\nmatplotlib's wall s is in process; a new process first spends %.3f s starting Python and "
+          "importing matplotlib (median of 3)." % matplotlib_start_s())
     # The picture: matplotlib's and hsr's SVG of the first scene, side by side.
     first = SCENES[0][0]
     a = matplotlib.image.imread(os.path.join(out, first + ".matplotlib.png"))[:, :, :3]
