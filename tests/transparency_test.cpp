@@ -105,46 +105,48 @@ TEST(Transparency, AbufferIdsAreRaycasts) {
   EXPECT_EQ(test::firstDifference(a.depth, r.depth), -1);
 }
 
-TEST(Transparency, NewellAndBspBlendWithinRoundingOfTheAbuffer) {
+// The glass scene and translucent polygons, each from its own camera and 4 around it, at 160x120,
+// with the A-buffer's frame of each view.
+template <class Check>
+void forEachTranslucentView(Check&& check) {
   for (const Scene& scene : {loadScene("builtin:glass"), translucentPolygons(5)}) {
     std::vector<CameraSpec> cameras{conformance::ownPose(scene).spec};
     for (const conformance::Pose& p : conformance::posesAround(scene, 4, 9)) cameras.push_back(p.spec);
     for (const CameraSpec& spec : cameras) {
       const Camera camera = resolveCamera(spec, 160, 120, scene.bounds());
-      const Frame reference = renderWith(scene, camera, "abuffer");
-      for (const char* algorithm : {"newell", "bsp"}) {
-        const algo::ColorError e = algo::colorError(renderWith(scene, camera, algorithm), reference);
-        EXPECT_EQ(e.beyondStep, 0u) << algorithm << " on " << scene.source << "\n" << cameraSpecToJson(spec);
-        EXPECT_LE(std::max({e.max[0], e.max[1], e.max[2]}), 1) << algorithm;
-        EXPECT_GT(e.pixels, uint64_t(160 * 120) * 9 / 10) << algorithm;
-      }
+      check(scene, camera, spec, renderWith(scene, camera, "abuffer"));
     }
   }
+}
+
+TEST(Transparency, NewellAndBspBlendWithinRoundingOfTheAbuffer) {
+  forEachTranslucentView([](const Scene& scene, const Camera& camera, const CameraSpec& spec, const Frame& reference) {
+    for (const char* algorithm : {"newell", "bsp"}) {
+      const algo::ColorError e = algo::colorError(renderWith(scene, camera, algorithm), reference);
+      EXPECT_EQ(e.beyondStep, 0u) << algorithm << " on " << scene.source << "\n" << cameraSpecToJson(spec);
+      EXPECT_LE(std::max({e.max[0], e.max[1], e.max[2]}), 1) << algorithm;
+      EXPECT_GT(e.pixels, uint64_t(160 * 120) * 9 / 10) << algorithm;
+    }
+  });
 }
 
 // The reverse painter's front to back: each fragment composited under the nearer ones until the
 // pixel is opaque, in float, rounded once as the A-buffer rounds: within one step of it (in the
 // BSP tree's exact order); ids the nearest fragment's, as without transparency.
 TEST(Transparency, ReversePainterBlendsFrontToBackWithinRoundingOfTheAbuffer) {
-  for (const Scene& scene : {loadScene("builtin:glass"), translucentPolygons(5)}) {
-    std::vector<CameraSpec> cameras{conformance::ownPose(scene).spec};
-    for (const conformance::Pose& p : conformance::posesAround(scene, 4, 9)) cameras.push_back(p.spec);
-    for (const CameraSpec& spec : cameras) {
-      const Camera camera = resolveCamera(spec, 160, 120, scene.bounds());
-      const Frame reference = renderWith(scene, camera, "abuffer");
-      const Frame f = renderWith(scene, camera, "reverse-painter");
-      EXPECT_EQ(f.stats.detailText("write_rule"), "blend-under");
-      const algo::ColorError e = algo::colorError(f, reference);
-      EXPECT_EQ(e.beyondStep, 0u) << scene.source << "\n" << cameraSpecToJson(spec);
-      EXPECT_LE(std::max({e.max[0], e.max[1], e.max[2]}), 1) << scene.source;
-      EXPECT_GT(e.pixels, uint64_t(160 * 120) * 9 / 10) << scene.source;
-      RenderOptions idsOnly;
-      idsOnly.algorithm = "reverse-painter";
-      idsOnly.outputs = FrameOutputs::FaceIds;
-      idsOnly.threads = 1;
-      EXPECT_EQ(render(scene, camera, idsOnly).faceId, f.faceId) << scene.source;
-    }
-  }
+  forEachTranslucentView([](const Scene& scene, const Camera& camera, const CameraSpec& spec, const Frame& reference) {
+    const Frame f = renderWith(scene, camera, "reverse-painter");
+    EXPECT_EQ(f.stats.detailText("write_rule"), "blend-under");
+    const algo::ColorError e = algo::colorError(f, reference);
+    EXPECT_EQ(e.beyondStep, 0u) << scene.source << "\n" << cameraSpecToJson(spec);
+    EXPECT_LE(std::max({e.max[0], e.max[1], e.max[2]}), 1) << scene.source;
+    EXPECT_GT(e.pixels, uint64_t(160 * 120) * 9 / 10) << scene.source;
+    RenderOptions idsOnly;
+    idsOnly.algorithm = "reverse-painter";
+    idsOnly.outputs = FrameOutputs::FaceIds;
+    idsOnly.threads = 1;
+    EXPECT_EQ(render(scene, camera, idsOnly).faceId, f.faceId) << scene.source;
+  });
   // A sort key's front-to-back order is wrong on the glass scene's cycle and interpenetration:
   // the nearest face is not drawn first on hundreds of pixels.
   const Scene glass = loadScene("builtin:glass");
