@@ -993,9 +993,15 @@ int runCli(int argc, char** argv) {
       "Run 'hsr help COMMAND' or 'hsr COMMAND --help' for a command's flags.\n"
       "Exit status: 0 success, 2 bad usage or bad input (one line on stderr), 1 any other failure.");
   std::map<const CLI::App*, Runner> runners;
+  std::string maxMemory;
+  std::vector<CLI::Option*> maxMemoryFlags;
   for (const Subcommand& s : kSubcommands) {
     CLI::App* cmd = app.add_subcommand(s.name, s.summary);
     runners[cmd] = s.setup(*cmd);
+    maxMemoryFlags.push_back(cmd->add_option("--max-memory", maxMemory,
+                    "Refuse up front a request that would need more memory than this (e.g. 512M, 4G; default: the "
+                    "machine's available memory)")
+        ->type_name("SIZE"));
   }
   try {
     app.parse(argc, argv);
@@ -1006,6 +1012,8 @@ int runCli(int argc, char** argv) {
     std::string topic = chosen.empty() ? "hsr help" : "hsr help " + chosen.front()->get_name();
     throw InputError(std::string(e.what()) + " (see '" + topic + "')");
   }
+  if (std::any_of(maxMemoryFlags.begin(), maxMemoryFlags.end(), [](CLI::Option* o) { return o->count() > 0; }))
+    hsr::setMemoryLimit(hsr::parseMemorySize(maxMemory));
   return runners.at(app.get_subcommands().front())();  // require_subcommand(1): exactly one
 }
 

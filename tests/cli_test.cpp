@@ -532,3 +532,30 @@ TEST_F(CommandLine, MessagesSayWhatIsWrong) {
   ASSERT_EQ(r.status, 0) << r;
   EXPECT_NE(r.out.find("zero area on the pixel grid 0"), std::string::npos) << r;
 }
+
+// --max-memory: a request beyond it is refused up front, in one line, with exit 2 and no output.
+TEST_F(CommandLine, MaxMemoryRefusesAHugeImageUpFront) {
+  Result r = hsr("render builtin:cubes --size 16384x16384 --max-memory 256M -o big.png");
+  EXPECT_EQ(r.status, 2) << r;
+  EXPECT_TRUE(r.oneErrorLine()) << r;
+  EXPECT_NE(r.err.find("--size 16384x16384"), std::string::npos) << r;
+  EXPECT_NE(r.err.find("memory limit of 256 MiB (--max-memory)"), std::string::npos) << r;
+  EXPECT_FALSE(fs::exists(file("big.png")));
+}
+
+TEST_F(CommandLine, MaxMemoryRefusesAnAbsurdBuiltinScene) {
+  Result r = hsr("info 'builtin:random?n=50000000' --max-memory 1G");
+  EXPECT_EQ(r.status, 2) << r;
+  EXPECT_TRUE(r.oneErrorLine()) << r;
+  EXPECT_NE(r.err.find("builtin:random?n=50000000 needs about"), std::string::npos) << r;
+}
+
+TEST_F(CommandLine, MaxMemoryTakesUnitsAndRefusesNonsense) {
+  EXPECT_EQ(hsr("info builtin:cubes --max-memory 2GiB").status, 0);
+  EXPECT_EQ(hsr("info builtin:cubes --max-memory 1.5g").status, 0);
+  for (const char* bad : {"banana", "12Q", "-5G", "100K", "''"}) {
+    Result r = hsr(std::string("info builtin:cubes --max-memory ") + bad);
+    EXPECT_EQ(r.status, 2) << bad << "\n" << r;
+    EXPECT_TRUE(r.oneErrorLine()) << r;
+  }
+}

@@ -7,6 +7,7 @@
 #include <hsr/depth_format.hpp>
 #include <hsr/frame.hpp>
 #include <hsr/io.hpp>
+#include <hsr/limits.hpp>
 #include <hsr/render.hpp>
 #include <hsr/scene.hpp>
 #include <hsr/shadows.hpp>

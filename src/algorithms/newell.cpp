@@ -7,6 +7,7 @@
 // the other's plane (polygon_split.hpp), its pieces keeping the face. The order is computed in
 // object space each frame, and the pieces are drawn back to front through the drawing service
 // (Overwrite, no depth buffer) as a derived scene. Runs on the caller's thread.
+#include <hsr/limits.hpp>
 #include <hsr/scene.hpp>
 
 #include <algorithm>
@@ -36,6 +37,10 @@ struct NewellCounts {
 // Screen distance below which two projections count as touching, not overlapping (rounding of
 // the pixel coordinates; far below the 1/128 pixel --verify calls an edge).
 constexpr double kTouchPixels = 1e-7;
+
+// Bytes the sorter holds per polygon (the polygon, its world and pixel vertices, list entries),
+// an upper estimate from the peak resident size of sorts of random triangles.
+constexpr double kBytesPerPolygon = 384;
 
 class DepthSorter {
  public:
@@ -88,6 +93,7 @@ class DepthSorter {
   const Scene& scene_;
   const Camera& camera_;
   uint64_t maxPolygons_;
+  double memoryPolygons_;  // polygons that fit in the memory limit
   double epsilon_;
   dmat4 pixelFromWorld_;
   dvec4 eye_;  // homogeneous: (position, 1), or (direction towards the eye, 0) when orthographic
@@ -105,7 +111,8 @@ class DepthSorter {
 };
 
 DepthSorter::DepthSorter(const Scene& scene, const Camera& camera, uint64_t maxPolygons)
-    : scene_(scene), camera_(camera), maxPolygons_(maxPolygons), epsilon_(sceneEpsilon(scene)) {
+    : scene_(scene), camera_(camera), maxPolygons_(maxPolygons),
+      memoryPolygons_(double(memoryLimit()) / kBytesPerPolygon), epsilon_(sceneEpsilon(scene)) {
   pixelFromWorld_ = camera.pixelFromCamera * camera.cameraFromWorld;
   if (camera.orthographic) {
     const dvec3 forward = dvec3(glm::inverse(camera.cameraFromWorld) * dvec4(0, 0, 1, 0));
@@ -153,6 +160,9 @@ void DepthSorter::addPolygon(std::span<const dvec3> vertices, uint32_t plane, ui
   if (polys_.size() >= maxPolygons_)
     throw InputError("newell: the depth sort of " + scene_.source + " would hold more than max-fragments=" +
                      std::to_string(maxPolygons_) + " polygons; raise --param max-fragments");
+  if (double(polys_.size()) >= memoryPolygons_)
+    checkMemory(double(polys_.size() + 1) * kBytesPerPolygon,
+                "newell: the depth sort of " + scene_.source + " (" + std::to_string(polys_.size() + 1) + " polygons so far)");
   polys_.push_back(p);
   if (input) ++counts.polygons;
 }

@@ -1,6 +1,7 @@
 // render(): the common frame set-up around every algorithm (its parameters checked, buffers
 // sized, scene counts, total time, --verify against the ray-cast reference). Called by the CLI,
 // the benchmarks and tests; the algorithms themselves are in the registry (algorithms/registry.cpp).
+#include <hsr/limits.hpp>
 #include <hsr/render.hpp>
 
 #include "algorithms/algorithms.hpp"
@@ -39,6 +40,29 @@ void algo::checkImage(const Camera& camera, DepthFormat format) {
     throw InputError("--depth-format: the inv mapping needs near > 0");
 }
 
+namespace {
+
+// What a render needs besides the scene: per pixel the frame's buffers and the algorithm's own
+// depth buffer, per triangle the front end's set-up and bins (rounded up from the peak resident
+// size of the z-buffer on a million random triangles, about 260 bytes each); twice with
+// --verify (the reference is a second frame).
+constexpr double kWorkBytesPerTriangle = 320;
+
+void checkRenderMemory(const Scene& scene, const Camera& camera, const RenderOptions& options) {
+  double perPixel = 4.0 + 4.0;  // depth, and the algorithm's own depth buffer
+  if (has(options.outputs, FrameOutputs::FaceIds)) perPixel += 4;
+  if (has(options.outputs, FrameOutputs::TriangleIds)) perPixel += 4;
+  if (has(options.outputs, FrameOutputs::Color)) perPixel += 4;
+  if (options.countWrites) perPixel += sizeof(WriteCount);
+  double bytes = double(camera.width) * double(camera.height) * perPixel +
+                 double(scene.triangles.size()) * kWorkBytesPerTriangle;
+  if (options.verify) bytes *= 2;
+  checkMemory(bytes, "--size " + std::to_string(camera.width) + "x" + std::to_string(camera.height) + " with " +
+                         std::to_string(scene.triangles.size()) + " triangles");
+}
+
+}  // namespace
+
 const char* kernelInstructionSet() { return tiled::kernelTarget(); }
 
 Frame render(const Scene& scene, const Camera& camera, const RenderOptions& options) {
@@ -56,6 +80,7 @@ void render(const Scene& scene, const Camera& camera, const RenderOptions& optio
   }
   const AlgorithmParams params = resolveParams(*algorithm, options.params);
   algo::checkImage(camera, options.depthFormat);
+  checkRenderMemory(scene, camera, options);
 
   if (options.verify && !has(options.outputs, FrameOutputs::IdsAndDepth))
     throw InputError("--verify: compares face and triangle ids, which the outputs asked for (" +

@@ -25,9 +25,12 @@ HWY_AFTER_NAMESPACE();
 namespace hsr {
 namespace stream {
 HWY_EXPORT(FillAndFence);
-}
+// Dispatched from inside the namespace: HWY_DYNAMIC_DISPATCH names the function unqualified
+// when only the static target is compiled (HSR_BASELINE_SIMD_ONLY).
+void fillAndFence(uint32_t* dst, uint32_t value, size_t n) { HWY_DYNAMIC_DISPATCH(FillAndFence)(dst, value, n); }
+}  // namespace stream
 
-void streamFill(uint32_t* dst, uint32_t value, size_t n) { HWY_DYNAMIC_DISPATCH(stream::FillAndFence)(dst, value, n); }
+void streamFill(uint32_t* dst, uint32_t value, size_t n) { stream::fillAndFence(dst, value, n); }
 
 }  // namespace hsr
 #endif  // HWY_ONCE

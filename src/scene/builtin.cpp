@@ -1,6 +1,8 @@
 // The registry of built-in scenes: their parameters (names, defaults, ranges), the parsing of
 // "NAME?k=v&k=v" specs into checked arguments, and the shared helpers of the generators.
 // Consumed by loadScene() ("builtin:..."), `hsr scenes` (builtinScenes()) and the tests.
+#include <hsr/limits.hpp>
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -86,7 +88,14 @@ struct SceneDef {
   std::string summary;
   std::vector<ParamDef> params;
   Scene (*generate)(const Args&);
+  /// At least the triangles it generates, for the memory check before generating (none: a few).
+  double (*triangles)(const Args&) = nullptr;
 };
+
+// Bytes a generated scene holds per triangle, finalized (positions, polygons, colours,
+// triangulation, clusters), rounded up from `hsr info`'s peak resident size for random, city
+// and clutter scenes of millions of triangles (about 115-120 bytes each).
+constexpr double kSceneBytesPerTriangle = 128;
 
 // The registry, in the order `hsr scenes` lists it. Ranges keep every scene below
 // kMaxTriangles triangles.
@@ -101,29 +110,30 @@ const std::vector<SceneDef>& sceneDefs() {
        {integerParam("n", 5000, 1, kMaxTriangles, "number of triangles"), seedParam(),
         realParam("size", "0.15", 0.001, 1,
                   "triangle circumradius as a fraction of the box height (box 2.67 x 2 x 2)")},
-       makeRandom},
+       makeRandom, [](const Args& a) { return double(a.integer("n")); }},
       {"sphere",
        "a geodesic sphere (subdivided icosahedron) of about N triangles",
        {integerParam("n", 1'000'000, 1, kMaxTriangles,
                      "target triangle count; the actual count is 20 k^2 nearest to it")},
-       makeSphere},
+       makeSphere, [](const Args& a) { return double(a.integer("n")); }},
       {"layers",
        "N screen-filling quads at evenly spaced depths (depth complexity N)",
        {integerParam("n", 64, 1, 100'000, "number of layers"),
         choiceParam("order", {"back-to-front", "front-to-back", "random"},
                     "submission (face) order of the layers"),
         seedParam("random seed of order=random")},
-       makeLayers},
+       makeLayers, [](const Args& a) { return 2.0 * double(a.integer("n")); }},
       {"city",
        "a city of box buildings seen from street level (heavy occlusion)",
        {integerParam("blocks", 30, 1, 1000, "the city is blocks x blocks blocks of 4 buildings"),
         seedParam()},
-       makeCity},
+       makeCity, [](const Args& a) { return 48.0 * double(a.integer("blocks")) * double(a.integer("blocks")); }},
       {"clutter",
        "N rounded objects (stretched geodesic spheres) on a floor, seen at eye height (occlusion of curved meshes)",
        {integerParam("n", 400, 1, 5000, "number of objects"),
         integerParam("detail", 7, 1, 16, "each object has 20 detail^2 triangles"), seedParam()},
-       makeClutter},
+       makeClutter,
+       [](const Args& a) { return 20.0 * double(a.integer("n")) * double(a.integer("detail") * a.integer("detail")); }},
       {"painter-midpoint",
        "a long tilted polygon in front of a square although its midpoint is behind (KTH report Fig. 2/3)",
        {},
@@ -332,6 +342,7 @@ Scene makeBuiltin(const std::string& spec) {
   for (const auto& p : def->params)
     if (!args.values.count(p.name)) args.values[p.name] = parseValue(p, p.defaultValue, where);
 
+  if (def->triangles) checkMemory(def->triangles(args) * kSceneBytesPerTriangle, "builtin:" + spec);
   Scene scene = def->generate(args);
   scene.source = "builtin:" + spec;
   scene.finalize();

@@ -1,0 +1,9 @@
+// Fuzz target: the own PLY loader (src/scene/load_ply.cpp) and Scene::finalize() on any bytes.
+#include "fuzz/fuzz_util.hpp"
+#include "scene/loaders.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  std::string_view bytes(reinterpret_cast<const char*>(data), size);
+  hsr::fuzz::refusedOrDone([&] { hsr::loaders::loadPly("fuzz.ply", bytes).finalize(); });
+  return 0;
+}

@@ -1,0 +1,23 @@
+// The memory limit: one process-wide bound on what a single request (an image's buffers, a
+// generated scene, a BSP tree or depth sort, a batch of views) may allocate, checked up front
+// from the request's own size, so that an absurd request fails with a clear InputError instead
+// of meeting the kernel's out-of-memory killer. The CLI sets it from --max-memory (docs/cli.md).
+#pragma once
+#include <cstdint>
+#include <string>
+
+namespace hsr {
+
+/// The limit in bytes: the one set, else the machine's available memory when first asked
+/// (/proc/meminfo's MemAvailable; 8 GiB where that cannot be read).
+uint64_t memoryLimit();
+/// Sets the limit (bytes; 0 restores the machine's default). Thread-safe.
+void setMemoryLimit(uint64_t bytes);
+/// Throws InputError "WHAT needs about N MiB, more than the memory limit of M MiB (--max-memory)"
+/// when `bytes` exceeds the limit.
+void checkMemory(double bytes, const std::string& what);
+/// Parses a size as --max-memory takes it: a number with an optional unit K, M, G or T (powers of
+/// 1024; "B" allowed after it: "512M", "2GiB", "1.5G"). Throws InputError naming `what`.
+uint64_t parseMemorySize(const std::string& text, const std::string& what = "--max-memory");
+
+}  // namespace hsr

@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (fuzz/, clang 16, ASan + UBSan, the SIMD kernel for the baseline
+# target only) into ./build-fuzz and runs each for SECONDS (default 60), one after the other.
+# Corpora grow in build-fuzz/corpus/NAME, seeded from fuzz/seeds, fuzz/regressions and Debian's
+# assimp-testmodels; a crash is saved in build-fuzz/crashes/NAME/ and makes the script fail.
+# Usage: scripts/fuzz.sh [SECONDS] [NAME ...]   (names: obj ply stl off assimp scene_json ...)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-60}
+shift || true
+scripts/install-deps.sh clang-16 libclang-rt-16-dev assimp-testmodels
+scripts/configure-checked.sh build-fuzz -DHSR_FUZZ=ON
+names=("$@")
+if [ ${#names[@]} -eq 0 ]; then
+  for f in fuzz/*_fuzz.cpp; do n=$(basename "$f" _fuzz.cpp); names+=("$n"); done
+fi
+cmake --build build-fuzz -j"$(nproc)" --target "${names[@]/#/fuzz_}"
+
+models=/usr/share/assimp/models
+declare -A patterns=([obj]='*.obj' [ply]='*.ply' [stl]='*.stl' [off]='*.off' [assimp]='*.gl[tb]*')
+failed=()
+for name in "${names[@]}"; do
+  corpus=build-fuzz/corpus/$name crashes=build-fuzz/crashes/$name
+  mkdir -p "$corpus" "$crashes"
+  for d in fuzz/seeds/$name fuzz/regressions/$name; do [ -d "$d" ] && cp -n "$d"/* "$corpus"/ 2>/dev/null || true; done
+  if [ -n "${patterns[$name]:-}" ] && [ -d "$models" ]; then
+    find "$models" -iname "${patterns[$name]}" -size -64k -type f -print0 |
+      while IFS= read -r -d '' f; do cp -n "$f" "$corpus/$(echo "${f#$models/}" | tr / _)"; done
+  fi
+  maxlen=65536
+  [ "$name" = render ] && maxlen=4096
+  [ "$name" = builtin ] && maxlen=256
+  echo "fuzz: $name for ${seconds}s"
+  # Leaks are checked; a run slower than 20 s or above 2 GB is a finding too.
+  if ! ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 UBSAN_OPTIONS=print_stacktrace=1 \
+      build-fuzz/fuzz/fuzz_"$name" "$corpus" -max_total_time="$seconds" -max_len=$maxlen -timeout=20 \
+      -rss_limit_mb=2048 -artifact_prefix="$crashes/" -print_final_stats=1 > "build-fuzz/fuzz-$name.log" 2>&1; then
+    failed+=("$name")
+    echo "fuzz: $name FAILED, see build-fuzz/fuzz-$name.log and $crashes/"
+    tail -n 30 "build-fuzz/fuzz-$name.log"
+  fi
+  grep -E '^stat::number_of_executed_units|^stat::peak_rss_mb' "build-fuzz/fuzz-$name.log" | tr '\n' ' ' && echo
+done
+if [ ${#failed[@]} -ne 0 ]; then
+  echo "fuzz: failed: ${failed[*]}"
+  exit 1
+fi
+echo "fuzz: all ${#names[@]} targets ran ${seconds}s without a finding"
