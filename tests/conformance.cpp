@@ -113,11 +113,14 @@ std::string judge(const Guarantee& g, const Outcome& o, bool failureScene, bool 
 // The statistics as JSON without what differs from run to run by design: the times (time_ms,
 // and the algorithms' own details named *_ms) and whether this frame built a structure cached
 // with the scene (the BSP tree's "built": 1 on the first render only); with `threads` other than
-// 1, also memory_bytes, which counts each worker's own scratch buffers.
+// 1, also the memory (memory_bytes and its buffers), which counts each worker's own scratch.
 std::string statsWithoutTimes(const Stats& stats, int threads = 1) {
   Stats copy = stats;
   copy.time_ms.clear();
-  if (threads != 1) copy.memory_bytes = 0;
+  if (threads != 1) {
+    copy.memory_bytes = 0;
+    copy.memory.clear();
+  }
   std::erase_if(copy.details,
                 [](const auto& detail) { return detail.first.ends_with("_ms") || detail.first == "built"; });
   return copy.toJson(-1);
