@@ -3,7 +3,7 @@
 // the JSON printed (CONVENTIONS.md "Command line").
 #include <gtest/gtest.h>
 
-#include "temp_dir.hpp"
+#include "cli_runner.hpp"
 #include <nlohmann/json.hpp>
 #include <stb/stb_image.h>
 
@@ -22,41 +22,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string readText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using hsr::test::readText;
+using Result = hsr::test::CliResult;
 
-struct Result {
-  int status = -1;
-  std::string out, err;
-  // Usage errors are exactly one line "hsr: ...".
-  bool oneErrorLine() const {
-    return err.rfind("hsr: ", 0) == 0 && std::count(err.begin(), err.end(), '\n') == 1 && err.back() == '\n';
-  }
-};
-
-std::ostream& operator<<(std::ostream& os, const Result& r) {
-  return os << "status " << r.status << "\nstdout: " << r.out << "\nstderr: " << r.err;
-}
-
-class CommandLine : public hsr::test::TempDirTest {
+class CommandLine : public hsr::test::CliTest {
  protected:
-
-  // Runs `hsr ARGS` in the scratch directory (ARGS is shell text: quote as needed).
-  Result hsr(const std::string& args) const {
-    std::string command = "cd '" + dir_.string() + "' && '" HSR_CLI_PATH "' " + args + " >stdout.txt 2>stderr.txt";
-    int raw = std::system(command.c_str());
-    Result result;
-    result.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    result.out = readText(dir_ / "stdout.txt");
-    result.err = readText(dir_ / "stderr.txt");
-    fs::remove(dir_ / "stdout.txt");
-    fs::remove(dir_ / "stderr.txt");
-    return result;
-  }
-  fs::path file(const std::string& name) const { return dir_ / name; }
-  void writeFile(const std::string& name, const std::string& text) const { std::ofstream(dir_ / name) << text; }
   std::vector<std::string> listing() const {
     std::vector<std::string> names;
     for (const auto& entry : fs::directory_iterator(dir_)) names.push_back(entry.path().filename().string());

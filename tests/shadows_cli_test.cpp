@@ -3,7 +3,7 @@
 // scene JSON's light and the flags that override it, and one-line errors with exit status 2.
 #include <gtest/gtest.h>
 
-#include "temp_dir.hpp"
+#include "cli_runner.hpp"
 #include <nlohmann/json.hpp>
 #include <stb/stb_image.h>
 
@@ -17,37 +17,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string readText(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using hsr::test::readText;
+using Result = hsr::test::CliResult;
 
-struct Result {
-  int status = -1;
-  std::string out, err;
-  bool oneErrorLine() const {
-    return err.rfind("hsr: ", 0) == 0 && std::count(err.begin(), err.end(), '\n') == 1 && err.back() == '\n';
-  }
-};
-
-std::ostream& operator<<(std::ostream& os, const Result& r) {
-  return os << "status " << r.status << "\nstdout: " << r.out << "\nstderr: " << r.err;
-}
-
-class ShadowsCommandLine : public hsr::test::TempDirTest {
+class ShadowsCommandLine : public hsr::test::CliTest {
  protected:
-  Result hsr(const std::string& args) const {
-    std::string command = "cd '" + dir_.string() + "' && '" HSR_CLI_PATH "' " + args + " >stdout.txt 2>stderr.txt";
-    int raw = std::system(command.c_str());
-    Result result;
-    result.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    result.out = readText(dir_ / "stdout.txt");
-    result.err = readText(dir_ / "stderr.txt");
-    fs::remove(dir_ / "stdout.txt");
-    fs::remove(dir_ / "stderr.txt");
-    return result;
-  }
-  void writeFile(const std::string& name, const std::string& text) const { std::ofstream(dir_ / name) << text; }
   // The sum of the red channel of a PNG written in the scratch directory.
   uint64_t redSum(const std::string& name) const {
     int w = 0, h = 0, channels = 0;
