@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}
 shift || true
-scripts/install-deps.sh clang-16 libclang-rt-16-dev assimp-testmodels
+scripts/install-deps.sh clang-16 libclang-rt-16-dev llvm-16 assimp-testmodels
 scripts/configure-checked.sh build-fuzz -DHSR_FUZZ=ON
 names=("$@")
 if [ ${#names[@]} -eq 0 ]; then
@@ -16,6 +16,7 @@ if [ ${#names[@]} -eq 0 ]; then
 fi
 cmake --build build-fuzz -j"$(nproc)" --target "${names[@]/#/fuzz_}"
 
+export ASAN_SYMBOLIZER_PATH=/usr/lib/llvm-16/bin/llvm-symbolizer  # stacks with names
 models=/usr/share/assimp/models
 declare -A patterns=([obj]='*.obj' [ply]='*.ply' [stl]='*.stl' [off]='*.off' [assimp]='*.gl[tb]*')
 failed=()
@@ -33,6 +34,7 @@ for name in "${names[@]}"; do
   echo "fuzz: $name for ${seconds}s"
   # Leaks are checked; a run slower than 20 s or above 2 GB is a finding too.
   if ! ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 UBSAN_OPTIONS=print_stacktrace=1 \
+      LSAN_OPTIONS=suppressions=$PWD/fuzz/lsan.supp \
       build-fuzz/fuzz/fuzz_"$name" "$corpus" -max_total_time="$seconds" -max_len=$maxlen -timeout=20 \
       -rss_limit_mb=2048 -artifact_prefix="$crashes/" -print_final_stats=1 > "build-fuzz/fuzz-$name.log" 2>&1; then
     failed+=("$name")

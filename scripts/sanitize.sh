@@ -8,7 +8,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 mode=${1:-address}
 [ $# -gt 0 ] && shift
-scripts/install-deps.sh clang-16 libclang-rt-16-dev
+scripts/install-deps.sh clang-16 libclang-rt-16-dev llvm-16
+export ASAN_SYMBOLIZER_PATH=/usr/lib/llvm-16/bin/llvm-symbolizer  # stacks with names
 case "$mode" in
   address)
     dir=build-fuzz
@@ -18,6 +19,7 @@ case "$mode" in
     # sanitizer flags: it cannot link against a sanitized library, so it is left out here.
     export ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:check_initialization_order=1
     export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+    export LSAN_OPTIONS=suppressions=$PWD/fuzz/lsan.supp
     ctest --test-dir "$dir" --output-on-failure -j"$(nproc)" -E '^install_and_consume$' "$@"
     ;;
   thread)

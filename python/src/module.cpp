@@ -2,6 +2,8 @@
 // orthographic, camera JSON) and hsr.render into NumPy arrays. docs/python.md is its manual.
 #include "common.hpp"
 
+#include <hsr/limits.hpp>
+
 #include <pybind11/stl.h>
 
 #include <cerrno>
@@ -278,6 +280,19 @@ size (arrays (N, H, W[, C]), the views spread over the threads). Returns a dict 
 algorithm, params, depth_format ("f32:reversed" by default), cull ("none", "back", "front") are
 `hsr render`'s --algorithm, --param, --depth-format, --cull; threads 0 uses every core. The GIL is
 released while rendering; the arrays are the module's buffers, not copies.)");
+  m.def(
+      "set_max_memory",
+      [](py::handle size) {
+        if (size.is_none()) return hsr::setMemoryLimit(0);
+        if (!py::isinstance<py::str>(size) && !py::isinstance<py::int_>(size))
+          throw hsr::InputError("set_max_memory: expected a number of bytes or a string such as '512M'");
+        hsr::setMemoryLimit(hsr::parseMemorySize(py::str(size).cast<std::string>(), "set_max_memory"));
+      },
+      py::arg("size"),
+      R"(Sets the memory limit that hsr.render and hsr.load check before allocating (the CLI's
+--max-memory): bytes, or a string such as "512M" or "2GiB"; None restores the default, the machine's
+available memory. A render whose outputs exceed it raises MemoryError, a built-in scene ValueError.)");
+  m.def("max_memory", [] { return hsr::memoryLimit(); }, "The memory limit in bytes (hsr.set_max_memory).");
   m.def("algorithms", [] {
     std::vector<std::string> names;
     for (const hsr::AlgorithmInfo& a : hsr::algorithms()) names.push_back(a.name);

@@ -2,9 +2,10 @@
 // with the GIL released, every output handed to NumPy without a copy (buffers.hpp).
 #include "buffers.hpp"
 
+#include <hsr/limits.hpp>
+
 #include <pybind11/stl.h>
 
-#include <unistd.h>
 
 #include <array>
 #include <algorithm>
@@ -146,16 +147,21 @@ std::vector<hsr::Camera> camerasOf(const SceneData& data, py::handle cameras, bo
   return out;
 }
 
-// Refuses outputs larger than the machine's memory: MemoryError, before anything is allocated
-// (Linux would promise the memory and kill the process when it is touched).
-void checkMemory(const Wanted& wanted, size_t views, size_t pixels) {
+// Refuses outputs larger than the memory limit (hsr.set_max_memory, by default the machine's
+// available memory): MemoryError, before anything is allocated (Linux would promise the memory
+// and kill the process when it is touched). The renders' own frames are checked by hsr::render.
+void checkMemory(const Wanted& wanted, size_t views, const hsr::Camera& camera) {
+  const size_t pixels = size_t(camera.width) * size_t(camera.height);
   double bytes = 0;
   for (int o = 0; o < kOutputCount; ++o)
     if (wanted[size_t(o)]) bytes += double(views) * double(pixels) * double(kOutputs[o].channels * kOutputs[o].bytes);
-  const double memory = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
-  if (bytes > memory) {
-    const std::string message = "render: the outputs need " + std::to_string(int64_t(bytes / 1e6)) + " MB, more than this machine's " +
-                                std::to_string(int64_t(memory / 1e6)) + " MB of memory";
+  try {
+    hsr::checkMemory(bytes, "render: the outputs of " + std::to_string(views) + " view(s) of " +
+                                std::to_string(camera.width) + "x" + std::to_string(camera.height));
+  } catch (const hsr::InputError& e) {
+    std::string message = e.what();
+    if (const size_t flag = message.rfind("(--max-memory)"); flag != std::string::npos)
+      message.replace(flag, std::string("(--max-memory)").size(), "(hsr.set_max_memory)");
     PyErr_SetString(PyExc_MemoryError, message.c_str());
     throw py::error_already_set();
   }
@@ -296,7 +302,7 @@ py::dict renderToArrays(const SceneData& scene, py::handle cameras, py::handle o
   const hsr::RenderOptions options = optionsOf(wanted, algorithm, params, depthFormat, cull, shading, background, threads);
   bool batch = false;
   const std::vector<hsr::Camera> resolved = camerasOf(scene, cameras, batch);
-  checkMemory(wanted, resolved.size(), size_t(resolved[0].width) * size_t(resolved[0].height));
+  checkMemory(wanted, resolved.size(), resolved[0]);
   return batch ? renderBatch(scene, resolved, options, wanted) : renderOne(scene, resolved[0], options, wanted);
 }
 

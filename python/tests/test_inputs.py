@@ -173,5 +173,27 @@ def test_render_refuses_bad_arguments(cubes, cli):
 
 def test_huge_batches_raise_memoryerror_not_crash(cubes):
     cam = cubes.default_camera(16384, 16384)
-    with pytest.raises(MemoryError, match="more than this machine's"):
+    with pytest.raises(MemoryError, match="more than the memory limit"):
         hsr.render(cubes, [cam] * 4096, outputs=("depth", "face_id", "color"))
+
+
+def test_max_memory_bounds_batches_and_scenes(cubes):
+    default = hsr.max_memory()
+    cam = cubes.default_camera(256, 256)
+    try:
+        hsr.set_max_memory("64M")
+        assert hsr.max_memory() == 64 << 20
+        # 300 views x 256 x 256 x (4 + 4) bytes = 150 MiB of outputs.
+        with pytest.raises(MemoryError, match=r"300 view\(s\) of 256x256 needs about 150 MiB.*hsr.set_max_memory"):
+            hsr.render(cubes, [cam] * 300)
+        assert hsr.render(cubes, [cam] * 10)["depth"].shape == (10, 256, 256)
+        with pytest.raises(ValueError, match="more than the memory limit"):
+            hsr.load("builtin:random?n=1000000")
+        hsr.set_max_memory(1 << 30)
+        assert hsr.max_memory() == 1 << 30
+    finally:
+        hsr.set_max_memory(None)
+    assert hsr.max_memory() == default
+    for bad in ("banana", "12Q", "-5G", "", 1000, 2.5):
+        with pytest.raises(ValueError, match="set_max_memory"):
+            hsr.set_max_memory(bad)

@@ -18,13 +18,20 @@
 namespace hsr::builtin {
 namespace {
 
+// Makes room for `extra` more elements, at least doubling the capacity when it grows, so that a
+// scene built of many meshes, each reserving its own, grows in linear time.
+template <class T>
+void reserveMore(std::vector<T>& v, size_t extra) {
+  if (v.size() + extra > v.capacity()) v.reserve(std::max(v.size() + extra, 2 * v.capacity()));
+}
+
 // Reserves room for `faces` faces of `corners` corners each and `vertices` more positions, so
-// large scenes grow without reallocation.
+// large scenes grow without repeated reallocation.
 void reserve(Scene& scene, size_t faces, size_t corners, size_t vertices) {
-  scene.positions.reserve(scene.positions.size() + vertices);
-  scene.polygonIndices.reserve(scene.polygonIndices.size() + faces * corners);
-  scene.polygonOffsets.reserve(scene.polygonOffsets.size() + faces);
-  scene.faceColors.reserve(scene.faceColors.size() + faces);
+  reserveMore(scene.positions, vertices);
+  reserveMore(scene.polygonIndices, faces * corners);
+  reserveMore(scene.polygonOffsets, faces);
+  reserveMore(scene.faceColors, faces);
 }
 
 }  // namespace
@@ -195,9 +202,16 @@ Scene makeClutter(const Args& args) {
     const dmat3 turn(dvec3(1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)),
                      dvec3(2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)),
                      dvec3(2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)));
-    const dvec3 radii(random.uniform(0.3, 1.2), random.uniform(0.3, 1.2), random.uniform(0.3, 1.2));
+    // One draw per statement: the order of a call's arguments differs between compilers. The
+    // draws run z before x, the order the pinned scenes were made with.
+    dvec3 radii;
+    radii.z = random.uniform(0.3, 1.2);
+    radii.y = random.uniform(0.3, 1.2);
+    radii.x = random.uniform(0.3, 1.2);
     const double lift = std::max({radii.x, radii.y, radii.z}) * 0.8;
-    const dvec3 centre(random.uniform(1, side - 1), lift, random.uniform(1, side - 1));
+    dvec3 centre(0, lift, 0);
+    centre.z = random.uniform(1, side - 1);
+    centre.x = random.uniform(1, side - 1);
     const Rgba8 color = paletteColor(i, 0.5, 0.9);
     scene.beginMesh("object" + std::to_string(i));
     addGeodesicSphere(
