@@ -211,7 +211,7 @@ HWY_INLINE void LoadVertices(const ProjectedVertex* projected, const uint32_t* c
 
 // Snaps the vertices (snapCoordinate: an integer below 2^23, the same in double as in int64)
 // into X, Y and classifies each of the first `lanes` lanes by twice its signed area on the
-// snapped grid (exact): degenerate (0) or culled by `cull` (never a degenerate one), both
+// snapped grid (exact): degenerate (0 or NaN) or culled by `cull` (never a degenerate one), both
 // counted, else live; front facing when negative (counter-clockwise with y down). Returns the
 // twice signed area.
 HWY_INLINE V Facing(const V* sx, const V* sy, Cull cull, size_t lanes, FrontEndCounters& counters, V* X, V* Y,
@@ -224,7 +224,9 @@ HWY_INLINE V Facing(const V* sx, const V* sy, Cull cull, size_t lanes, FrontEndC
   }
   const V zero = hn::Zero(d);
   const V area = hn::Sub(hn::Mul(hn::Sub(X[1], X[0]), hn::Sub(Y[2], Y[0])), hn::Mul(hn::Sub(Y[1], Y[0]), hn::Sub(X[2], X[0])));
-  const M degenerate = hn::Eq(area, zero);
+  // Degenerate also when the area is NaN (a vertex projected to NaN): such a lane must not
+  // survive to the records, whose coordinates are integers.
+  const M degenerate = hn::Not(hn::Or(hn::Lt(area, zero), hn::Gt(area, zero)));
   front = hn::Lt(area, zero);
   M culled = hn::FirstN(d, 0);
   if (cull == Cull::Back) culled = hn::AndNot(front, hn::Not(degenerate));

@@ -61,6 +61,23 @@ namespace hsr::tiled {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
+// double -> float lane by lane as the C++ cast rounds it (IEEE). Highway's emulated targets
+// saturate infinities to the float range when they narrow; eye depth is +inf where nothing was
+// drawn, so those targets convert lane by lane instead.
+template <class DF, class VD>
+HWY_INLINE hn::Vec<DF> NarrowToFloat(DF df, VD v) {
+#if HWY_TARGET == HWY_EMU128 || HWY_TARGET == HWY_SCALAR
+  const hn::Rebind<double, DF> dd;
+  HWY_ALIGN double wide[HWY_MAX_BYTES / sizeof(double)];
+  HWY_ALIGN float narrow[HWY_MAX_BYTES / sizeof(double)];
+  hn::Store(v, dd, wide);
+  for (size_t i = 0; i < hn::Lanes(df); ++i) narrow[i] = static_cast<float>(wide[i]);
+  return hn::Load(df, narrow);
+#else
+  return hn::DemoteTo(df, v);
+#endif
+}
+
 using hsr::stream::HWY_NAMESPACE::StreamCopy;
 using hsr::stream::HWY_NAMESPACE::StreamFill;
 using hsr::stream::HWY_NAMESPACE::kLineValues;
@@ -1339,7 +1356,7 @@ uint64_t ResolveDepthT(const TileJob& job, const TileScratch& s, int rowBegin, i
       const Mask drawn = hn::And(hn::FirstN(d, std::min(N, size_t(tf.w) - k)), hn::Ne(q, clearV));
       covered += hn::CountTrue(d, drawn);
       const V eye = hn::IfThenElse(drawn, EyeDepthOfStored<S, M>(q, job.depth), infinity);
-      hn::Store(hn::DemoteTo(df, eye), df, row + k);
+      hn::Store(NarrowToFloat(df, eye), df, row + k);
     }
     StreamCopy(reinterpret_cast<uint32_t*>(frame.depth.data() + frame.index(tf.x0, tf.y0 + y)),
                reinterpret_cast<const uint32_t*>(row), size_t(tf.w));
@@ -1406,7 +1423,7 @@ HWY_INLINE void ResolveFour(const Bins& bins, uint64_t* keys, uint64_t* cells, d
   const VH eye = hn::Div(hn::Add(hn::Add(hn::Mul(p[0], Xv), hn::Mul(p[1], Yv)), p[2]),
                          hn::Add(hn::Add(hn::Mul(p[3], Xv), hn::Mul(q[0], Yv)), q[1]));
   const hn::Rebind<float, H4> hf;
-  const auto eyeBits = hn::PromoteTo(hu, hn::BitCast(hn::Rebind<uint32_t, H4>(), hn::DemoteTo(hf, eye)));
+  const auto eyeBits = hn::PromoteTo(hu, hn::BitCast(hn::Rebind<uint32_t, H4>(), NarrowToFloat(hf, eye)));
   const auto ids = hn::BitCast(hu, q[2]), flags = hn::BitCast(hu, q[3]);
   const auto high = hn::Set(hu, 0xFFFFFFFF00000000ull);
   auto cell = hn::Or(hn::And(ids, high), eyeBits);  // eye depth, face
@@ -1488,7 +1505,7 @@ void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
           auto blend = [&](uint64_t key, auto lanes) {  // key's lanes get its values (0: background)
             if (!key) return;
             const SetupTriangle& t = bins.triangle(key);
-            const auto eye = hn::BitCast(du32, hn::DemoteTo(df, EyeDepthRow(t, X, Y)));
+            const auto eye = hn::BitCast(du32, NarrowToFloat(df, EyeDepthRow(t, X, Y)));
             cellV = hn::IfThenElse(lanes, hn::Or(hn::PromoteTo(du, eye), hn::Set(du, PackCell(0, Bits32(int32_t(t.face))))),
                                    cellV);
             const uint32_t color = kColor ? colorOf(key, t) : 0;
@@ -1591,7 +1608,7 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
       plane.numBY = hn::Set(d, t.depthNum.b * Y), plane.denBY = hn::Set(d, t.depthDen.b * Y);
       for (size_t k = 0; k < size_t(w); k += N) {
         const V X = hn::Iota(d, double(x0 + int(k)) + 0.5);
-        hn::Store(hn::BitCast(du32, hn::DemoteTo(df, EyeDepthAt(plane, X))), du32, rows[0] + k);
+        hn::Store(hn::BitCast(du32, NarrowToFloat(df, EyeDepthAt(plane, X))), du32, rows[0] + k);
       }
       covered += uint64_t(w);
       streamRows(y);
@@ -1650,7 +1667,7 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
         uniformY = Y;
       }
       const V X = hn::Iota(d, double(x0 + int(k)) + 0.5);
-      hn::Store(hn::BitCast(du32, hn::DemoteTo(df, EyeDepthAt(planes, X))), du32, depthOut);
+      hn::Store(hn::BitCast(du32, NarrowToFloat(df, EyeDepthAt(planes, X))), du32, depthOut);
       hn::Store(uniformFace, du32, faceOut);
       hn::Store(uniformTriangle, du32, triangleOut);
       if constexpr (kColor) hn::Store(uniformColor, du32, colorOut);
@@ -1739,7 +1756,7 @@ void StoreTileT(const TileScratch& from, KeptTile& to) {
         const V v = hn::Load(d, first + size_t(y) * kTileSize + k);
         hn::Vec<decltype(du32)> bits;
         if constexpr (S == DepthStorage::F32) {
-          bits = hn::BitCast(du32, hn::DemoteTo(df, v));
+          bits = hn::BitCast(du32, NarrowToFloat(df, v));
         } else {  // an integer code below 2^32, through int32 (exact; outside the image: any bits)
           const auto offset = hn::DemoteTo(di32, hn::Sub(v, hn::Set(d, 2147483648.0)));
           bits = hn::Xor(hn::BitCast(du32, offset), hn::Set(du32, 0x80000000u));
