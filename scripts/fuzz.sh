@@ -1,27 +1,29 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (fuzz/, clang 16, ASan + UBSan, the SIMD kernel for the baseline
-# target only) into ./build-fuzz and runs each for SECONDS (default 60), one after the other.
-# Corpora grow in build-fuzz/corpus/NAME, seeded from fuzz/seeds, fuzz/regressions and Debian's
-# assimp-testmodels; a crash is saved in build-fuzz/crashes/NAME/ and makes the script fail.
+# target only) into BUILD_DIR (./build-fuzz) and runs each for SECONDS (default 60), one after the other.
+# Corpora grow in BUILD_DIR/corpus/NAME, seeded from fuzz/seeds, fuzz/regressions and Debian's
+# assimp-testmodels; a crash is saved in BUILD_DIR/crashes/NAME/ and makes the script fail.
 # Usage: scripts/fuzz.sh [SECONDS] [NAME ...]   (names: obj ply stl off assimp scene_json ...)
+#        environment: BUILD_DIR (default build-fuzz; CI's checked run uses build-ci, scripts/sanitize.sh quick)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}
 shift || true
 scripts/install-deps.sh clang-16 libclang-rt-16-dev llvm-16 assimp-testmodels
-scripts/configure-checked.sh build-fuzz -DHSR_FUZZ=ON
+build=${BUILD_DIR:-build-fuzz}
+scripts/configure-checked.sh "$build" -DHSR_FUZZ=ON
 names=("$@")
 if [ ${#names[@]} -eq 0 ]; then
   for f in fuzz/*_fuzz.cpp; do n=$(basename "$f" _fuzz.cpp); names+=("$n"); done
 fi
-cmake --build build-fuzz -j"$(nproc)" --target "${names[@]/#/fuzz_}"
+cmake --build "$build" -j"$(nproc)" --target "${names[@]/#/fuzz_}"
 
 export ASAN_SYMBOLIZER_PATH=/usr/lib/llvm-16/bin/llvm-symbolizer  # stacks with names
 models=/usr/share/assimp/models
 declare -A patterns=([obj]='*.obj' [ply]='*.ply' [stl]='*.stl' [off]='*.off' [assimp]='*.gl[tb]*')
 failed=()
 for name in "${names[@]}"; do
-  corpus=build-fuzz/corpus/$name crashes=build-fuzz/crashes/$name
+  corpus=$build/corpus/$name crashes=$build/crashes/$name
   mkdir -p "$corpus" "$crashes"
   for d in fuzz/seeds/$name fuzz/regressions/$name; do [ -d "$d" ] && cp -n "$d"/* "$corpus"/ 2>/dev/null || true; done
   if [ -n "${patterns[$name]:-}" ] && [ -d "$models" ]; then
@@ -35,13 +37,13 @@ for name in "${names[@]}"; do
   # Leaks are checked; a run slower than 20 s or above 2 GB is a finding too.
   if ! ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 UBSAN_OPTIONS=print_stacktrace=1 \
       LSAN_OPTIONS=suppressions=$PWD/fuzz/lsan.supp \
-      build-fuzz/fuzz/fuzz_"$name" "$corpus" -max_total_time="$seconds" -max_len=$maxlen -timeout=20 \
-      -rss_limit_mb=2048 -artifact_prefix="$crashes/" -print_final_stats=1 > "build-fuzz/fuzz-$name.log" 2>&1; then
+      $build/fuzz/fuzz_"$name" "$corpus" -max_total_time="$seconds" -max_len=$maxlen -timeout=20 \
+      -rss_limit_mb=2048 -artifact_prefix="$crashes/" -print_final_stats=1 > "$build/fuzz-$name.log" 2>&1; then
     failed+=("$name")
-    echo "fuzz: $name FAILED, see build-fuzz/fuzz-$name.log and $crashes/"
-    tail -n 30 "build-fuzz/fuzz-$name.log"
+    echo "fuzz: $name FAILED, see $build/fuzz-$name.log and $crashes/"
+    tail -n 30 "$build/fuzz-$name.log"
   fi
-  grep -E '^stat::number_of_executed_units|^stat::peak_rss_mb' "build-fuzz/fuzz-$name.log" | tr '\n' ' ' && echo
+  grep -E '^stat::number_of_executed_units|^stat::peak_rss_mb' "$build/fuzz-$name.log" | tr '\n' ' ' && echo
 done
 if [ ${#failed[@]} -ne 0 ]; then
   echo "fuzz: failed: ${failed[*]}"

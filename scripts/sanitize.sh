@@ -2,6 +2,8 @@
 # The test suite under sanitizers (clang 16, the SIMD kernel for the baseline target only).
 #   scripts/sanitize.sh          AddressSanitizer + UndefinedBehaviorSanitizer, every ctest test
 #                                (in ./build-fuzz, the build that also holds the fuzz targets)
+#   scripts/sanitize.sh quick    the same with the SIMD kernel (src/raster/tiled.cpp) uninstrumented,
+#                                which builds in minutes (./build-ci: CI's checked run, .ci/run)
 #   scripts/sanitize.sh thread   ThreadSanitizer over the threaded tests (./build-tsan)
 # Extra arguments go to ctest (e.g. -R Loader).
 set -euo pipefail
@@ -11,9 +13,10 @@ mode=${1:-address}
 scripts/install-deps.sh clang-16 libclang-rt-16-dev llvm-16
 export ASAN_SYMBOLIZER_PATH=/usr/lib/llvm-16/bin/llvm-symbolizer  # stacks with names
 case "$mode" in
-  address)
-    dir=build-fuzz
-    scripts/configure-checked.sh "$dir" -DHSR_FUZZ=ON
+  address|quick)
+    dir=build-fuzz kernel=ON
+    [ "$mode" = quick ] && dir=build-ci kernel=OFF
+    scripts/configure-checked.sh "$dir" -DHSR_FUZZ=ON -DHSR_SANITIZE_KERNEL=$kernel
     cmake --build "$dir" -j"$(nproc)"
     # The install test builds an outside project against the installed package, which carries no
     # sanitizer flags: it cannot link against a sanitized library, so it is left out here.
@@ -31,7 +34,7 @@ case "$mode" in
       -R 'Parallel\.|WorkQueue\.|RenderViews\.|Determinism|Concurrent|Conformance' "$@"
     ;;
   *)
-    echo "usage: scripts/sanitize.sh [address|thread] [ctest args]" >&2
+    echo "usage: scripts/sanitize.sh [address|quick|thread] [ctest args]" >&2
     exit 2
     ;;
 esac

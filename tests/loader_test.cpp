@@ -649,6 +649,15 @@ TEST_F(LoaderHostile, BinaryPlyIndexErrorsPrintIntegers) {
   expectError("index.ply", b.s, {"face 0: vertex index -5 out of range (3 vertices)"});
 }
 
+// A GLB whose header declares a first chunk longer than the file is refused before assimp, which
+// would allocate the declared length (a fuzz finding: 1.7 GB for a 3 KB file).
+TEST_F(LoaderHostile, GlbChunkLengthBeyondTheFileIsRefusedBeforeAssimp) {
+  Bytes b;
+  b.text("glTF").put(uint32_t(2)).put(uint32_t(1900)).put(uint32_t(1711277184)).text("JSON");
+  b.text(R"({"asset":{"version":"2.0"}})");
+  expectError("huge-chunk.glb", b.s, {"huge-chunk.glb: GLB header: the first chunk declares 1711277184 bytes"});
+}
+
 // --- Dispatch -----------------------------------------------------------------------------------
 
 class LoaderDispatch : public LoaderTest {};

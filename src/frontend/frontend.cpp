@@ -99,6 +99,13 @@ bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, const Cam
 
 bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, const Camera& cam, Cull cull,
                    FrontEndCounters& counters, SetupTriangle& t) {
+  // A NaN in the scene survives clipping (it is inside every plane) and has no place on the
+  // pixel grid: such a triangle is degenerate, as the batched set-up counts it.
+  for (int i = 0; i < 3; ++i)
+    if (!std::isfinite(v[i].sx) || !std::isfinite(v[i].sy)) {
+      ++counters.degenerate;
+      return false;
+    }
   const int64_t X[3] = {v[0].X(), v[1].X(), v[2].X()}, Y[3] = {v[0].Y(), v[1].Y(), v[2].Y()};
   // Twice the signed area on the snapped grid, y down: negative = counter-clockwise as seen.
   const int64_t area = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
