@@ -99,10 +99,12 @@ bool setupTriangle(const HVertex* v, uint32_t triIndex, uint32_t face, const Cam
 
 bool setupTriangle(const ProjectedVertex* v, uint32_t triIndex, uint32_t face, const Camera& cam, Cull cull,
                    FrontEndCounters& counters, SetupTriangle& t) {
-  // A NaN in the scene survives clipping (it is inside every plane) and has no place on the
-  // pixel grid: such a triangle is degenerate, as the batched set-up counts it.
+  // A vertex off the grid's range has no place on it: a NaN in the scene (it survives clipping,
+  // being inside every plane), or a coordinate near the double range that clipping's arithmetic
+  // could not bring in (clipping leaves |s| < 2^15 pixels). Its triangle is counted degenerate.
+  constexpr double kGridLimit = 0x1p20;
   for (int i = 0; i < 3; ++i)
-    if (!std::isfinite(v[i].sx) || !std::isfinite(v[i].sy)) {
+    if (!(std::abs(v[i].sx) < kGridLimit && std::abs(v[i].sy) < kGridLimit)) {
       ++counters.degenerate;
       return false;
     }
