@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Configures a checking build of hsr with clang 16 (scripts/sanitize.sh, scripts/fuzz.sh): -O1
-# with line tables (file:line in every sanitizer stack, without the cost of full debug information),
-# the SIMD kernel for the baseline target only, no Python module or benchmarks. Usage: scripts/configure-checked.sh BUILD_DIR [extra cmake args]
+# with line tables (file:line in every sanitizer stack, without full debug information), the SIMD
+# kernel for the baseline target only, no Python module or benchmarks.
+# Usage: scripts/configure-checked.sh BUILD_DIR [extra cmake args]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 dir=$1

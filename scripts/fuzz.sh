@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets (fuzz/, clang 16, ASan + UBSan, the SIMD kernel for the baseline
-# target only) into BUILD_DIR (./build-fuzz) and runs each for SECONDS (default 60), one after the other.
+# target only) into BUILD_DIR (./build-fuzz) and runs each for SECONDS (default 60), one after
+# the other.
 # Corpora grow in BUILD_DIR/corpus/NAME, seeded from fuzz/seeds, fuzz/regressions and Debian's
 # assimp-testmodels; a crash is saved in BUILD_DIR/crashes/NAME/ and makes the script fail.
 # Usage: scripts/fuzz.sh [SECONDS] [NAME ...]   (names: obj ply stl off assimp scene_json ...)
-#        environment: BUILD_DIR (default build-fuzz; CI's checked run uses build-ci, scripts/sanitize.sh quick)
+#        environment: BUILD_DIR (default build-fuzz; build-ci is scripts/sanitize.sh quick's build)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}
@@ -37,7 +38,7 @@ for name in "${names[@]}"; do
   # Leaks are checked; a run slower than 20 s or above 2 GB is a finding too.
   if ! ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 UBSAN_OPTIONS=print_stacktrace=1 \
       LSAN_OPTIONS=suppressions=$PWD/fuzz/lsan.supp \
-      $build/fuzz/fuzz_"$name" "$corpus" -max_total_time="$seconds" -max_len=$maxlen -timeout=20 \
+      "$build/fuzz/fuzz_$name" "$corpus" -max_total_time="$seconds" -max_len=$maxlen -timeout=20 \
       -rss_limit_mb=2048 -artifact_prefix="$crashes/" -print_final_stats=1 > "$build/fuzz-$name.log" 2>&1; then
     failed+=("$name")
     echo "fuzz: $name FAILED, see $build/fuzz-$name.log and $crashes/"

@@ -3,7 +3,7 @@
 #   scripts/sanitize.sh          AddressSanitizer + UndefinedBehaviorSanitizer, every ctest test
 #                                (in ./build-fuzz, the build that also holds the fuzz targets)
 #   scripts/sanitize.sh quick    the same with the SIMD kernel (src/raster/tiled.cpp) uninstrumented,
-#                                which builds in minutes (./build-ci: CI's checked run, .ci/run)
+#                                which builds in a third of the time (./build-ci)
 #   scripts/sanitize.sh thread   ThreadSanitizer over the threaded tests (./build-tsan)
 # Extra arguments go to ctest (e.g. -R Loader).
 set -euo pipefail

@@ -67,9 +67,10 @@ namespace hn = hwy::HWY_NAMESPACE;
 template <class DF, class VD>
 HWY_INLINE hn::Vec<DF> NarrowToFloat(DF df, VD v) {
 #if HWY_TARGET == HWY_EMU128 || HWY_TARGET == HWY_SCALAR
-  const hn::Rebind<double, DF> dd;
-  HWY_ALIGN double wide[HWY_MAX_BYTES / sizeof(double)];
-  HWY_ALIGN float narrow[HWY_MAX_BYTES / sizeof(double)];
+  const hn::Rebind<double, DF> dd;  // as many lanes as df
+  constexpr size_t kLanes = HWY_MAX_BYTES / sizeof(double);
+  HWY_ALIGN double wide[kLanes];
+  HWY_ALIGN float narrow[kLanes];
   hn::Store(v, dd, wide);
   for (size_t i = 0; i < hn::Lanes(df); ++i) narrow[i] = static_cast<float>(wide[i]);
   return hn::Load(df, narrow);
