@@ -6,6 +6,8 @@
 # assimp-testmodels; a crash is saved in BUILD_DIR/crashes/NAME/ and makes the script fail.
 # Usage: scripts/fuzz.sh [SECONDS] [NAME ...]   (names: obj ply stl off assimp scene_json ...)
 #        environment: BUILD_DIR (default build-fuzz; build-ci is scripts/sanitize.sh quick's build)
+#                     FUZZ_RUNS=N: instead of SECONDS, N inputs per target from the fixed seed 1
+#                     (the same inputs every time: CI's bounded, repeatable run)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}
@@ -34,11 +36,13 @@ for name in "${names[@]}"; do
   maxlen=65536
   [ "$name" = render ] && maxlen=4096
   [ "$name" = builtin ] && maxlen=256
-  echo "fuzz: $name for ${seconds}s"
+  budget=(-max_total_time="$seconds")
+  [ -n "${FUZZ_RUNS:-}" ] && budget=(-runs="$FUZZ_RUNS" -seed=1)
+  echo "fuzz: $name for ${budget[*]}"
   # Leaks are checked; a run slower than 20 s or above 2 GB is a finding too.
   if ! ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 UBSAN_OPTIONS=print_stacktrace=1 \
       LSAN_OPTIONS=suppressions=$PWD/fuzz/lsan.supp \
-      "$build/fuzz/fuzz_$name" "$corpus" -max_total_time="$seconds" -max_len=$maxlen -timeout=20 \
+      "$build/fuzz/fuzz_$name" "$corpus" "${budget[@]}" -max_len=$maxlen -timeout=20 \
       -rss_limit_mb=2048 -artifact_prefix="$crashes/" -print_final_stats=1 > "$build/fuzz-$name.log" 2>&1; then
     failed+=("$name")
     echo "fuzz: $name FAILED, see $build/fuzz-$name.log and $crashes/"
@@ -50,4 +54,4 @@ if [ ${#failed[@]} -ne 0 ]; then
   echo "fuzz: failed: ${failed[*]}"
   exit 1
 fi
-echo "fuzz: all ${#names[@]} targets ran ${seconds}s without a finding"
+echo "fuzz: all ${#names[@]} targets ran (${budget[*]}) without a finding"

@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -178,6 +179,78 @@ Plan fullPlan() {
   return p;
 }
 
+Plan suitePlan() {
+#ifdef HSR_SANITIZED
+  // A sanitized build runs ten to twenty times slower and looks for memory and undefined-behaviour
+  // errors, which the same code paths show with fewer poses: every scene, size and depth format
+  // of the full plan, a fifth of its poses, and determinism on two of its three scenes (not the
+  // city, whose BSP tree under the first-polygon heuristic holds millions of fragments).
+  Plan p = fullPlan();
+  for (Plan::Case& c : p.cases) c.poses = std::max(2, c.poses / 5);
+  p.oddSizePoses = 1;
+  p.formatPoses = 1;
+  p.determinismPoses = 1;
+  std::erase(p.determinismScenes, "builtin:city");
+  return p;
+#else
+  return fullPlan();
+#endif
+}
+
+namespace {
+
+// One case: the scene's own pose and its seeded poses at 64x48, the first poses at the odd sizes.
+template <class Record>
+void checkPoses(const Plan::Case& c, const Scene& scene, const Plan& plan, Record& record) {
+  const DepthFormat defaultFormat;
+  const std::vector<Pose> poses = posesAround(scene, c.poses, std::hash<std::string>{}(c.scene) & 0xffff);
+  record(c.scene, scene, ownPose(scene), 64, 48, defaultFormat, true);
+  for (const Pose& pose : poses) record(c.scene, scene, pose, 64, 48, defaultFormat, false);
+  for (const auto& [w, h] : plan.oddSizes)
+    for (int i = 0; i < std::min<int>(plan.oddSizePoses, int(poses.size())); ++i)
+      record(c.scene, scene, poses[size_t(i)], w, h, defaultFormat, false);
+}
+
+// Determinism: the same bits in every buffer and the same statistics (times aside, and the
+// memory of the workers' scratch across thread counts) for 1, 2 and 8 threads, and for a second
+// run on 1 thread.
+void checkDeterminism(const Variant& variant, const std::string& name, const Scene& scene, int poseCount,
+                      std::vector<std::string>& failures) {
+  std::vector<Pose> poses = posesAround(scene, poseCount, 7);
+  poses.push_back(ownPose(scene));
+  for (const Pose& pose : poses) {
+    const Camera cam = resolveCamera(pose.spec, 150, 90, scene.bounds());
+    RenderOptions options;
+    options.threads = 1;
+    const Frame one = renderVariant(variant, scene, cam, options);
+    for (int threads : {1, 2, 8}) {
+      options.threads = threads;
+      const Frame many = renderVariant(variant, scene, cam, options);
+      const bool sameBuffers = sameBits(one.faceId, many.faceId) && sameBits(one.triangleId, many.triangleId) &&
+                               sameBits(one.depth, many.depth) && sameBits(one.color, many.color);
+      const std::string oneStats = statsWithoutTimes(one.stats, threads);
+      const std::string manyStats = statsWithoutTimes(many.stats, threads);
+      if (!sameBuffers || manyStats != oneStats)
+        failures.push_back(fmt::format("{} on {} at 150x90: {} threads differ from a first run on 1 ({}){}\n{}",
+                                       variant.describe(), name, threads, sameBuffers ? "statistics" : "buffers",
+                                       sameBuffers ? "\n" + oneStats + "\n" + manyStats : "", pose.describe()));
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> Plan::scenes() const {
+  std::vector<std::string> names;
+  auto add = [&](const std::string& name) {
+    if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+  };
+  for (const Case& c : cases) add(c.scene);
+  for (const std::string& name : formatScenes) add(name);
+  for (const std::string& name : determinismScenes) add(name);
+  return names;
+}
+
 std::vector<std::string> check(const Variant& variant, const Plan& plan) {
   const Guarantee g = variant.algorithm->guaranteeWith(resolveParams(*variant.algorithm, variant.params));
   std::vector<std::string> failures;
@@ -197,47 +270,17 @@ std::vector<std::string> check(const Variant& variant, const Plan& plan) {
       failures.push_back(fmt::format("{} on {} at {}x{}, {}: {} (guarantee: {})\n{}", variant.describe(), sceneName, w,
                                      h, format.name(), why, g.describe(), o.replay));
   };
-  const DepthFormat defaultFormat;
-  for (const Plan::Case& c : plan.cases) {
-    const Scene scene = load(c.scene);
-    const std::vector<Pose> poses = posesAround(scene, c.poses, std::hash<std::string>{}(c.scene) & 0xffff);
-    record(c.scene, scene, ownPose(scene), 64, 48, defaultFormat, true);
-    for (const Pose& pose : poses) record(c.scene, scene, pose, 64, 48, defaultFormat, false);
-    for (const auto& [w, h] : plan.oddSizes)
-      for (int i = 0; i < std::min<int>(plan.oddSizePoses, int(poses.size())); ++i)
-        record(c.scene, scene, poses[size_t(i)], w, h, defaultFormat, false);
-  }
-  for (const std::string& name : plan.formatScenes) {
+  // Scene by scene, so that a structure an algorithm caches with a scene (the BSP tree) is built
+  // once for all of that scene's checks.
+  for (const std::string& name : plan.scenes()) {
     const Scene scene = load(name);
-    const std::vector<Pose> poses = posesAround(scene, plan.formatPoses, 99);
-    for (const std::string& f : plan.formats)
-      for (const Pose& pose : poses) record(name, scene, pose, 64, 48, DepthFormat::parse(f), false);
-  }
-  // Determinism: the same bits in every buffer and the same statistics (times aside, and the
-  // memory of the workers' scratch across thread counts) for 1, 2 and 8 threads, and for a
-  // second run on 1 thread.
-  for (const std::string& name : plan.determinismScenes) {
-    const Scene scene = load(name);
-    std::vector<Pose> poses = posesAround(scene, plan.determinismPoses, 7);
-    poses.push_back(ownPose(scene));
-    for (const Pose& pose : poses) {
-      const Camera cam = resolveCamera(pose.spec, 150, 90, scene.bounds());
-      RenderOptions options;
-      options.threads = 1;
-      const Frame one = renderVariant(variant, scene, cam, options);
-      for (int threads : {1, 2, 8}) {
-        options.threads = threads;
-        const Frame many = renderVariant(variant, scene, cam, options);
-        const bool sameBuffers = sameBits(one.faceId, many.faceId) && sameBits(one.triangleId, many.triangleId) &&
-                                 sameBits(one.depth, many.depth) && sameBits(one.color, many.color);
-        const std::string oneStats = statsWithoutTimes(one.stats, threads);
-        const std::string manyStats = statsWithoutTimes(many.stats, threads);
-        if (!sameBuffers || manyStats != oneStats)
-          failures.push_back(fmt::format("{} on {} at 150x90: {} threads differ from a first run on 1 ({}){}\n{}",
-                                         variant.describe(), name, threads, sameBuffers ? "statistics" : "buffers",
-                                         sameBuffers ? "\n" + oneStats + "\n" + manyStats : "", pose.describe()));
-      }
-    }
+    for (const Plan::Case& c : plan.cases)
+      if (c.scene == name) checkPoses(c, scene, plan, record);
+    if (std::find(plan.formatScenes.begin(), plan.formatScenes.end(), name) != plan.formatScenes.end())
+      for (const Pose& pose : posesAround(scene, plan.formatPoses, 99))
+        for (const std::string& f : plan.formats) record(name, scene, pose, 64, 48, DepthFormat::parse(f), false);
+    if (std::find(plan.determinismScenes.begin(), plan.determinismScenes.end(), name) != plan.determinismScenes.end())
+      checkDeterminism(variant, name, scene, plan.determinismPoses, failures);
   }
   return failures;
 }

@@ -61,9 +61,13 @@ struct Plan {
   int formatPoses = 3;
   std::vector<std::string> determinismScenes;     // 1, 2 and 3 threads: the same bits
   int determinismPoses = 3;
+  std::vector<std::string> scenes() const;       // every scene above, once, in order of first mention
 };
 /// The full plan of the conformance suite.
 Plan fullPlan();
+/// The plan the test suite runs: the full plan, or in a sanitized build a lighter one (the same
+/// scenes, sizes and formats, fewer poses; docs/testing.md).
+Plan suitePlan();
 
 /// Every violation of `variant`'s guarantee on `plan`, one message each (empty: it conforms).
 std::vector<std::string> check(const Variant& variant, const Plan& plan);

@@ -30,7 +30,7 @@ std::vector<std::string> registeredNames() {
 TEST_P(ConformanceOf, KeepsItsGuarantee) {
   const AlgorithmInfo* algorithm = findAlgorithm(GetParam());
   ASSERT_NE(algorithm, nullptr);
-  const conformance::Plan plan = conformance::fullPlan();
+  const conformance::Plan plan = conformance::suitePlan();
   for (const conformance::Variant& variant : conformance::variantsOf(*algorithm)) {
     const std::vector<std::string> failures = conformance::check(variant, plan);
     // The first few in full (with their replay commands), then one line each.
@@ -57,7 +57,7 @@ TEST(Conformance, TheBuiltInAlgorithmsAreAllCovered) {
 // The depth range drawn in parts (an int parameter, so variantsOf does not vary it): as exact as
 // drawing it at once, with no crack or double cover where the parts' planes cut the triangles.
 TEST(Conformance, TheZbufferDrawnInDepthSlicesIsExact) {
-  const conformance::Plan plan = conformance::fullPlan();
+  const conformance::Plan plan = conformance::suitePlan();
   for (const std::map<std::string, std::string>& params :
        {std::map<std::string, std::string>{{"raster", "halfspace"}, {"depth-slices", "3"}},
         std::map<std::string, std::string>{{"raster", "binned"}, {"depth-slices", "7"}},
@@ -72,7 +72,7 @@ TEST(Conformance, TheZbufferDrawnInDepthSlicesIsExact) {
 // The image drawn region by region (a size parameter, not varied by variantsOf): exact at region
 // sizes that do and do not divide the conformance suite's odd image sizes.
 TEST(Conformance, TheZbufferDrawnRegionByRegionIsExact) {
-  const conformance::Plan plan = conformance::fullPlan();
+  const conformance::Plan plan = conformance::suitePlan();
   for (const char* region : {"1x1", "7x5", "64x64", "1000x3"}) {
     const conformance::Variant variant{findAlgorithm("zbuffer"), {{"region", region}}};
     const std::vector<std::string> failures = conformance::check(variant, plan);

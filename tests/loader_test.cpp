@@ -658,6 +658,16 @@ TEST_F(LoaderHostile, GlbChunkLengthBeyondTheFileIsRefusedBeforeAssimp) {
   expectError("huge-chunk.glb", b.s, {"huge-chunk.glb: GLB header: the first chunk declares 1711277184 bytes"});
 }
 
+// Debian's assimp dereferences null on a GLB line loop whose indices lie beyond its vertices
+// (a fuzz finding): the import is tried in a child process first, so the file is refused.
+TEST_F(LoaderHostile, AFileThatCrashesAssimpIsRefused) {
+  std::ifstream in(std::string(HSR_SOURCE_DIR) + "/fuzz/regressions/assimp/glb-line-loop-indices-beyond-vertices",
+                   std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), 1000u);
+  expectError("line-loop.glb", bytes, {"line-loop.glb: assimp crashed reading the file"});
+}
+
 // --- Dispatch -----------------------------------------------------------------------------------
 
 class LoaderDispatch : public LoaderTest {};
