@@ -199,6 +199,10 @@ Plan suitePlan() {
 
 namespace {
 
+bool contains(const std::vector<std::string>& list, const std::string& name) {
+  return std::find(list.begin(), list.end(), name) != list.end();
+}
+
 // One case: the scene's own pose and its seeded poses at 64x48, the first poses at the odd sizes.
 template <class Record>
 void checkPoses(const Plan::Case& c, const Scene& scene, const Plan& plan, Record& record) {
@@ -243,7 +247,7 @@ void checkDeterminism(const Variant& variant, const std::string& name, const Sce
 std::vector<std::string> Plan::scenes() const {
   std::vector<std::string> names;
   auto add = [&](const std::string& name) {
-    if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+    if (!contains(names, name)) names.push_back(name);
   };
   for (const Case& c : cases) add(c.scene);
   for (const std::string& name : formatScenes) add(name);
@@ -276,10 +280,10 @@ std::vector<std::string> check(const Variant& variant, const Plan& plan) {
     const Scene scene = load(name);
     for (const Plan::Case& c : plan.cases)
       if (c.scene == name) checkPoses(c, scene, plan, record);
-    if (std::find(plan.formatScenes.begin(), plan.formatScenes.end(), name) != plan.formatScenes.end())
+    if (contains(plan.formatScenes, name))
       for (const Pose& pose : posesAround(scene, plan.formatPoses, 99))
         for (const std::string& f : plan.formats) record(name, scene, pose, 64, 48, DepthFormat::parse(f), false);
-    if (std::find(plan.determinismScenes.begin(), plan.determinismScenes.end(), name) != plan.determinismScenes.end())
+    if (contains(plan.determinismScenes, name))
       checkDeterminism(variant, name, scene, plan.determinismPoses, failures);
   }
   return failures;
