@@ -1,14 +1,12 @@
 #!/usr/bin/env bash
-# Configures a checking build of hsr with clang 16 (scripts/sanitize.sh, scripts/fuzz.sh): -O1
-# with line tables (file:line in every sanitizer stack, without full debug information), the SIMD
-# kernel for the baseline target only, no Python module or benchmarks.
-# Usage: scripts/configure-checked.sh BUILD_DIR [extra cmake args]
+# Configures a checking build of hsr from one of CMakePresets.json's presets (asan, asan-quick,
+# tsan: clang 16 at -O1 with line tables, the SIMD kernel for the baseline target only), with
+# ccache when it is there. Used by scripts/sanitize.sh and scripts/fuzz.sh.
+# Usage: scripts/configure-checked.sh PRESET [extra cmake args, e.g. -B DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-dir=$1
+preset=$1
 shift
 launcher=()
 command -v ccache > /dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-cmake -S . -B "$dir" -G Ninja -DCMAKE_CXX_COMPILER=clang++-16 -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" -DHSR_BASELINE_SIMD_ONLY=ON -DHSR_BUILD_PYTHON=OFF \
-  -DHSR_BUILD_BENCH=OFF "${launcher[@]}" "$@" > /dev/null
+cmake --preset "$preset" "${launcher[@]}" "$@" > /dev/null

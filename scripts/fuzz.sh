@@ -14,7 +14,9 @@ seconds=${1:-60}
 shift || true
 scripts/install-deps.sh clang-16 libclang-rt-16-dev llvm-16 assimp-testmodels
 build=${BUILD_DIR:-build-fuzz}
-scripts/configure-checked.sh "$build" -DHSR_FUZZ=ON
+preset=asan
+[ "$build" = build-ci ] && preset=asan-quick
+scripts/configure-checked.sh $preset -B "$build"
 names=("$@")
 if [ ${#names[@]} -eq 0 ]; then
   for f in fuzz/*_fuzz.cpp; do n=$(basename "$f" _fuzz.cpp); names+=("$n"); done

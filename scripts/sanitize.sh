@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The test suite under sanitizers (clang 16, the SIMD kernel for the baseline target only).
+# The test suite under sanitizers (clang 16, the SIMD kernel for the baseline target only; the
+# builds are CMakePresets.json's asan, asan-quick and tsan presets).
 #   scripts/sanitize.sh          AddressSanitizer + UndefinedBehaviorSanitizer, every ctest test
 #                                (in ./build-fuzz, the build that also holds the fuzz targets)
 #   scripts/sanitize.sh quick    the same with the SIMD kernel (src/raster/tiled.cpp) uninstrumented,
@@ -14,9 +15,9 @@ scripts/install-deps.sh clang-16 libclang-rt-16-dev llvm-16
 export ASAN_SYMBOLIZER_PATH=/usr/lib/llvm-16/bin/llvm-symbolizer  # stacks with names
 case "$mode" in
   address|quick)
-    dir=build-fuzz kernel=ON
-    [ "$mode" = quick ] && dir=build-ci kernel=OFF
-    scripts/configure-checked.sh "$dir" -DHSR_FUZZ=ON -DHSR_SANITIZE_KERNEL=$kernel
+    dir=build-fuzz preset=asan
+    [ "$mode" = quick ] && dir=build-ci preset=asan-quick
+    scripts/configure-checked.sh $preset
     cmake --build "$dir" -j"$(nproc)"
     # The install test builds an outside project against the installed package, which carries no
     # sanitizer flags: it cannot link against a sanitized library, so it is left out here.
@@ -27,7 +28,7 @@ case "$mode" in
     ;;
   thread)
     dir=build-tsan
-    scripts/configure-checked.sh "$dir" -DHSR_SANITIZE=thread
+    scripts/configure-checked.sh tsan
     cmake --build "$dir" -j"$(nproc)" --target hsr_tests hsr_cli
     export TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1
     ctest --test-dir "$dir" --output-on-failure -j1 \
