@@ -226,8 +226,8 @@ HWY_INLINE V Facing(const V* sx, const V* sy, Cull cull, size_t lanes, FrontEndC
   const V area = hn::Sub(hn::Mul(hn::Sub(X[1], X[0]), hn::Sub(Y[2], Y[0])), hn::Mul(hn::Sub(Y[1], Y[0]), hn::Sub(X[2], X[0])));
   // Degenerate also when the area is NaN (a vertex projected to NaN): such a lane must not
   // survive to the records, whose coordinates are integers.
-  const M degenerate = hn::Not(hn::Or(hn::Lt(area, zero), hn::Gt(area, zero)));
   front = hn::Lt(area, zero);
+  const M degenerate = hn::Not(hn::Or(front, hn::Gt(area, zero)));
   M culled = hn::FirstN(d, 0);
   if (cull == Cull::Back) culled = hn::AndNot(front, hn::Not(degenerate));
   if (cull == Cull::Front) culled = front;
