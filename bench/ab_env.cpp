@@ -57,6 +57,7 @@ int main(int argc, char** argv) {
     if (depthOnly) o.outputs = hsr::FrameOutputs::DepthOnly;
     if (cullBack) o.cull = hsr::Cull::Back;
     hsr::Frame frame[2];
+    hsr::Renderer renderer[2] = {hsr::Renderer(scene, o), hsr::Renderer(scene, o)};
     hsr::OcclusionBuffer buffer[2];
     const hsr::OcclusionOptions occlusionOptions{o.depthFormat, o.cull, o.threads};
     std::vector<double> ms[2], ratio;
@@ -68,7 +69,7 @@ int main(int argc, char** argv) {
         if (pauseMs > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(pauseMs));
         const auto t0 = std::chrono::steady_clock::now();
         if (occlusion) buffer[which].render(scene, cam, occlusionOptions);
-        else hsr::render(scene, cam, o, frame[which]);
+        else renderer[which].render(cam, frame[which]);
         t[which] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       }
       if (i < 2) continue;

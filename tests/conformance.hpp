@@ -6,6 +6,8 @@
 #include <hsr/hsr.hpp>
 
 #include <map>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,6 +39,23 @@ struct Variant {
 /// parameter (the others at their defaults).
 std::vector<Variant> variantsOf(const AlgorithmInfo& algorithm);
 
+/// One variant's algorithm made for one scene and kept for many renders, as a Renderer keeps it
+/// (what it builds for the scene is built once): through Renderer when the registry holds the
+/// algorithm, else its object made directly, with the same set-up around it.
+class VariantRenderer {
+ public:
+  VariantRenderer(const Variant& variant, const Scene& scene);
+  /// A frame of the variant with `options` (its algorithm and parameters set from the variant).
+  Frame render(const Camera& cam, RenderOptions options);
+  const Variant& variant() const { return variant_; }
+
+ private:
+  const Variant& variant_;
+  AlgorithmParams params_;
+  std::optional<Renderer> registered_;
+  std::unique_ptr<Algorithm> object_;
+};
+
 /// One rendering checked against the reference.
 struct Outcome {
   uint64_t wrong = 0, ambiguous = 0, covered = 0;  // covered: pixels the reference covers
@@ -45,6 +64,9 @@ struct Outcome {
 /// Renders `variant` (through render() when its algorithm is registered, else directly with the
 /// same set-up), renders the reference and classifies every pixel (verifyAgainstReference).
 Outcome run(const Variant& variant, const std::string& sceneName, const Scene& scene, const Pose& pose, int width,
+            int height, DepthFormat format, int threads = 1);
+/// The same with a variant already made for `scene`.
+Outcome run(VariantRenderer& renderer, const std::string& sceneName, const Scene& scene, const Pose& pose, int width,
             int height, DepthFormat format, int threads = 1);
 
 /// What the harness covers.

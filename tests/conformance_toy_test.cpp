@@ -4,6 +4,7 @@
 
 #include <algorithm>
 
+#include "algorithms/algorithms.hpp"
 #include "algorithms/draw.hpp"
 #include "conformance.hpp"
 
@@ -17,16 +18,30 @@ double nearestDepth(const SetupTriangle& t) {
   return d;
 }
 
-void frontToBack(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
-                 Frame& frame) {
-  algo::drawScene(scene, camera, options, algo::WriteRule::DepthTest, algo::drawRasterOf(params),
-                  [](std::vector<SetupTriangle>& tris) {
-                    std::stable_sort(tris.begin(), tris.end(), [](const SetupTriangle& a, const SetupTriangle& b) {
-                      return nearestDepth(a) < nearestDepth(b);
-                    });
-                  },
-                  frame);
-}
+class FrontToBack final : public algo::SceneAlgorithm {
+ public:
+  using SceneAlgorithm::SceneAlgorithm;
+  void render(const Camera& camera, const RenderOptions& options, Frame& frame) override {
+    algo::drawScene(scene_, camera, options, algo::WriteRule::DepthTest, algo::drawRasterOf(params_),
+                    [](std::vector<SetupTriangle>& tris) {
+                      std::stable_sort(tris.begin(), tris.end(), [](const SetupTriangle& a, const SetupTriangle& b) {
+                        return nearestDepth(a) < nearestDepth(b);
+                      });
+                    },
+                    buffers_, frame);
+  }
+};
+
+// Submission order under a write rule (a template parameter: the object is made from a scene
+// and parameters only).
+template <algo::WriteRule Rule>
+class InSubmissionOrder final : public algo::SceneAlgorithm {
+ public:
+  using SceneAlgorithm::SceneAlgorithm;
+  void render(const Camera& camera, const RenderOptions& options, Frame& frame) override {
+    algo::drawScene(scene_, camera, options, Rule, algo::drawRasterOf(params_), {}, buffers_, frame);
+  }
+};
 
 AlgorithmInfo toy(const std::string& name, algo::WriteRule rule, bool sorted) {
   AlgorithmInfo a;
@@ -34,22 +49,15 @@ AlgorithmInfo toy(const std::string& name, algo::WriteRule rule, bool sorted) {
   a.summary = "a test's toy";
   a.source = "tests/conformance_toy_test.cpp";
   a.params = {algo::drawRasterParam("halfspace")};
-  if (sorted) {
-    a.run = frontToBack;
-  } else {  // submission order under `rule`
-    a.run = [rule](const Scene& scene, const Camera& camera, const RenderOptions& options,
-                   const AlgorithmParams& params, Frame& frame) {
-      algo::drawScene(scene, camera, options, rule, algo::drawRasterOf(params), {}, frame);
-    };
-  }
+  if (sorted) a.create = algo::factoryOf<FrontToBack>();
+  else if (rule == algo::WriteRule::DepthTest) a.create = algo::factoryOf<InSubmissionOrder<algo::WriteRule::DepthTest>>();
+  else a.create = algo::factoryOf<InSubmissionOrder<algo::WriteRule::Overwrite>>();
   return a;
 }
 
-// Registered before main(): the registry-driven suite (conformance_test.cpp) checks it too.
-const bool kToyRegistered = [] {
-  registerAlgorithm(toy("test-front-to-back", algo::WriteRule::DepthTest, true));
-  return true;
-}();
+// Registered before main() by this one line: the registry-driven suite (conformance_test.cpp)
+// checks it too.
+const bool kToyRegistered = (registerAlgorithm(toy("test-front-to-back", algo::WriteRule::DepthTest, true)), true);
 
 TEST(ConformanceToy, RegisteredToyIsInTheSuitesList) {
   ASSERT_TRUE(kToyRegistered);

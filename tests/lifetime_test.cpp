@@ -30,7 +30,7 @@ double residentBytes() {
 // One cycle: a fresh scene and camera, one algorithm's render into a fresh frame, and every
 // eighth cycle an SVG and a verification; everything is destroyed at the end.
 void cycle(size_t i) {
-  const std::vector<AlgorithmInfo>& all = algorithms();
+  const auto& all = algorithms();
   const Scene scene = loadScene("builtin:random?n=120&seed=" + std::to_string(i % 5));
   const Camera camera = resolveCamera(*scene.camera, 40, 30, scene.bounds());
   RenderOptions options;

@@ -67,7 +67,7 @@ TEST(RegionalZBuffer, BadSizesAreRefused) {
   EXPECT_THROW(render(scene, cam, optionsWith({{"region", "8x8"}, {"depth-slices", "2"}})), InputError);
 }
 
-// Frames of an orbit drawn into one Frame without clearing: each the same bits as that frame drawn
+// Frames of an orbit drawn by one algorithm object without clearing its buffer: each the same bits as that frame drawn
 // alone (from a cleared buffer), in every depth format; and exact against the ray caster.
 TEST(HalfRangeZBuffer, ManyFramesWithoutClearingGiveTheClearedImages) {
   const Scene scene = loadScene("builtin:city");
@@ -76,9 +76,10 @@ TEST(HalfRangeZBuffer, ManyFramesWithoutClearingGiveTheClearedImages) {
   const std::vector<Camera> orbit = orbitCameras(first, (b.lo + b.hi) * 0.5, 9);
   for (const char* format : {"f32:reversed", "u16:z", "u24:z", "u32:inv", "f32:linear"}) {
     RenderOptions o = optionsWith({{"clear", "half-range"}}, format);
+    Renderer renderer(scene, o);  // keeps the half-range buffer from frame to frame
     Frame kept;
     for (size_t i = 0; i < orbit.size(); ++i) {
-      render(scene, orbit[i], o, kept);
+      renderer.render(orbit[i], kept);
       const Frame alone = render(scene, orbit[i], o);
       const std::string what = std::string(format) + " frame " + std::to_string(i);
       expectSameImage(kept, alone, what);
@@ -90,9 +91,10 @@ TEST(HalfRangeZBuffer, ManyFramesWithoutClearingGiveTheClearedImages) {
   }
   RenderOptions verify = optionsWith({{"clear", "half-range"}});
   verify.verify = true;
+  Renderer verified(scene, verify);
   Frame kept;
   for (const Camera& cam : orbit) {
-    render(scene, cam, verify, kept);
+    verified.render(cam, kept);
     EXPECT_EQ(*kept.stats.wrong_pixels, 0u);
   }
 }
@@ -107,9 +109,10 @@ TEST(HalfRangeZBuffer, NoStaleSurfaceSurvivesTwoFrames) {
   far.cameraFromWorld[3] += glm::dvec4(0.3 * size, 0, 0.5 * size, 0);  // the scene moved aside and away
   far.far += 0.5 * size;
   RenderOptions o = optionsWith({{"clear", "half-range"}});
+  Renderer renderer(scene, o);
   Frame kept;
   for (const Camera* cam : std::vector<const Camera*>{&near, &far, &far, &near, &far}) {
-    render(scene, *cam, o, kept);
+    renderer.render(*cam, kept);
     expectSameImage(kept, render(scene, *cam, o), "after a change of view");
   }
 }

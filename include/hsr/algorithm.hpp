@@ -1,13 +1,17 @@
 // The algorithm contract: every visibility algorithm is declared once, with its name, summary,
 // source document, parameters and guarantee, in a registry that the command line (`hsr
-// algorithms`, `--param`), render(), the statistics and the conformance tests all read.
-// Declared in src/algorithms/NAME.cpp; listed in src/algorithms/registry.cpp.
+// algorithms`, `--param`), render(), the statistics and the conformance tests all read. The
+// registry's entry makes the algorithm as an object for one scene (Algorithm), which renders any
+// camera and owns what it keeps from view to view. Declared in src/algorithms/NAME.cpp; listed by
+// one line in src/algorithms/registry.cpp.
 #pragma once
 #include <hsr/frame.hpp>
 
 #include <cstdint>
 #include <functional>
+#include <deque>
 #include <map>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -81,11 +85,30 @@ class AlgorithmParams {
   std::vector<std::pair<std::string, std::string>> entries_;
 };
 
-/// A visibility algorithm's entry point: fills frame.faceId/triangleId/depth/color (those sized)
-/// and frame.stats, from a finalized scene and a resolved camera. render() sizes the frame (not
-/// cleared), starts its statistics (image size, scene counts) and records the parameters.
-using AlgorithmFn =
-    std::function<void(const Scene&, const Camera&, const RenderOptions&, const AlgorithmParams&, Frame&)>;
+/// A visibility algorithm made for one scene and one set of parameters (AlgorithmInfo::create):
+/// pbrt's Integrator in this toolkit. It owns what it keeps from one view to the next (a BSP
+/// tree, the tiled z-buffer's bins and buffers, the half-range depth buffer), so "build once, view
+/// many" is one object rendering many cameras. The scene must outlive it; one thread renders with
+/// it at a time (each render may use the thread pool inside).
+class Algorithm {
+ public:
+  virtual ~Algorithm() = default;
+  /// Fills frame.faceId/triangleId/depth/color (those sized) and frame.stats for `camera`.
+  /// render() has sized the frame (not cleared), started its statistics (image size, scene counts)
+  /// and checked the options; the algorithm writes every pixel of the buffers present. Fills
+  /// Frame::writes when RenderOptions::countWrites is set (the overdraw picture), or throws
+  /// InputError when it cannot with its parameters.
+  virtual void render(const Camera& camera, const RenderOptions& options, Frame& frame) = 0;
+};
+
+/// What an algorithm can do besides rendering a frame, declared in its registry entry.
+enum class Capability : uint8_t {
+  None = 0,
+  PaintsInOrder = 1,  // paints polygons back to front, so --svg can write them as vector polygons
+};
+
+/// Makes the algorithm for a finalized scene with checked parameters.
+using AlgorithmFactory = std::function<std::unique_ptr<Algorithm>(const Scene&, const AlgorithmParams&)>;
 
 /// An algorithm as the registry holds it.
 struct AlgorithmInfo {
@@ -100,13 +123,14 @@ struct AlgorithmInfo {
   Guarantee guaranteeWith(const AlgorithmParams& params) const {
     return guaranteeFor ? guaranteeFor(params) : guarantee;
   }
-  /// Fills Frame::writes when RenderOptions::countWrites is set (the overdraw picture), or throws
-  /// InputError when it cannot with these parameters.
-  AlgorithmFn run;
+  Capability capability = Capability::None;
+  /// Makes the algorithm for one scene (Algorithm).
+  AlgorithmFactory create;
 };
 
-/// Every registered algorithm, in the order `hsr algorithms` lists them.
-const std::vector<AlgorithmInfo>& algorithms();
+/// Every registered algorithm, in the order `hsr algorithms` lists them. Entries never move:
+/// a pointer from findAlgorithm stays valid after registerAlgorithm.
+const std::deque<AlgorithmInfo>& algorithms();
 /// The algorithm named `name`, or null.
 const AlgorithmInfo* findAlgorithm(const std::string& name);
 /// Adds an algorithm to the registry (for tests and embedders; call before rendering, from one

@@ -125,30 +125,6 @@ struct Stats {
   std::string toJson(int indent = 2) const;
 };
 
-/// State an algorithm keeps in a Frame from one frame to the next (the half-range z-buffer's
-/// depth buffer, which is not cleared between frames). A copy of the Frame starts without it.
-class KeptState {
- public:
-  struct Base {
-    virtual ~Base() = default;
-  };
-  KeptState() = default;
-  KeptState(const KeptState&) {}
-  KeptState& operator=(const KeptState&) {
-    state_.reset();
-    return *this;
-  }
-  KeptState(KeptState&&) noexcept = default;
-  KeptState& operator=(KeptState&&) noexcept = default;
-  /// The state if it is a T, else null.
-  template <class T>
-  T* get() const { return dynamic_cast<T*>(state_.get()); }
-  void reset(std::unique_ptr<Base> state = nullptr) { state_ = std::move(state); }
-
- private:
-  std::unique_ptr<Base> state_;
-};
-
 /// Per pixel, how many fragments wrote it: Frame::writes, for the overdraw picture.
 using WriteCount = uint32_t;
 
@@ -162,7 +138,6 @@ struct Frame {
   /// at each pixel); otherwise empty.
   FrameBuffer<WriteCount> writes;
   Stats stats;
-  KeptState kept;  // what an algorithm keeps for the next frame drawn into this one
 
   /// Sizes the buffers for w x h, reusing their memory: depth always, faceId, triangleId and
   /// color when `outputs` has them; the others are emptied. Contents are left as they are:

@@ -16,6 +16,7 @@
 #include <hsr/scene.hpp>
 
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -39,11 +40,41 @@ struct RenderOptions {
   bool countWrites = false;               // fill Frame::writes: fragments written per pixel
 };
 
-/// Renders `scene` (finalized) seen by `camera` with options.algorithm and options.params.
+/// One algorithm made for one scene, kept from view to view: "build once, view many". What the
+/// algorithm makes for the scene (a BSP tree, the tiled z-buffer's bins and buffers, the
+/// half-range depth buffer) is made at its first frame and kept by this object, never in a
+/// hidden cache. The scene must outlive the Renderer; one thread renders with it at a time.
+class Renderer {
+ public:
+  /// Checks options.algorithm and options.params (InputError) and makes the algorithm for `scene`.
+  Renderer(const Scene& scene, const RenderOptions& options);
+  ~Renderer();
+  Renderer(Renderer&&) noexcept;
+  Renderer& operator=(Renderer&&) noexcept;
+
+  /// Renders the view with the constructor's options into `frame`, reusing its buffers.
+  void render(const Camera& camera, Frame& frame);
+  Frame render(const Camera& camera);
+  /// The same with other options: anything may differ but the algorithm and its parameters
+  /// (std::invalid_argument when they do; make another Renderer for another algorithm).
+  void render(const Camera& camera, const RenderOptions& options, Frame& frame);
+
+  const AlgorithmInfo& algorithm() const { return *info_; }
+  const RenderOptions& options() const { return options_; }
+
+ private:
+  const Scene* scene_;
+  RenderOptions options_;
+  const AlgorithmInfo* info_;
+  AlgorithmParams params_;
+  std::unique_ptr<Algorithm> algorithm_;
+};
+
+/// Renders `scene` (finalized) seen by `camera` with options.algorithm and options.params: a
+/// Renderer made for this one view (so an algorithm that builds for the scene builds each call).
 /// Throws InputError for an unknown algorithm, parameter or bad options.
 Frame render(const Scene& scene, const Camera& camera, const RenderOptions& options);
-/// The same into `frame`, reusing its buffers: for rendering many frames (or views) without
-/// allocating a new visibility buffer each time.
+/// The same into `frame`, reusing its buffers.
 void render(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
 
 /// The instruction set the tiled rasterizer's SIMD kernel runs with on this machine, chosen at

@@ -9,7 +9,8 @@
 
 namespace hsr {
 
-/// Whether `algorithm` paints polygons in an order that vector output writes.
+/// Whether `algorithm` paints polygons in an order that vector output writes (its registry entry
+/// declares Capability::PaintsInOrder).
 bool paintsPolygons(const std::string& algorithm);
 
 /// The scene seen by `camera` as an SVG document of camera.width x camera.height pixels: the

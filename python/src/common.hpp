@@ -9,6 +9,7 @@
 
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,13 @@ struct SceneData {
 
   mutable std::once_flag normalsOnce;
   mutable std::vector<glm::vec3> triangleNormals;
+
+  /// Renders one view with the algorithm object this scene keeps for the last algorithm and
+  /// parameters it rendered with, so that repeated hsr.render calls build once (a BSP tree, the
+  /// tiled z-buffer's buffers); a call made while another uses it gets an object of its own.
+  void render(const hsr::Camera& camera, const hsr::RenderOptions& options, hsr::Frame& frame) const;
+  mutable std::mutex rendererMutex;
+  mutable std::optional<hsr::Renderer> renderer;
 };
 /// Builds the SceneData of a finalized scene; `instances` per mesh (empty: the mesh index).
 std::shared_ptr<SceneData> makeSceneData(hsr::Scene&& scene, std::vector<int32_t> instances = {});

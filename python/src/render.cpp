@@ -243,7 +243,7 @@ py::dict renderOne(const SceneData& d, const hsr::Camera& camera, const hsr::Ren
   Blocks blocks;
   {
     py::gil_scoped_release unlocked;
-    hsr::render(d.scene, camera, options, frame);
+    d.render(camera, options, frame);
     blocks = allocate(attributes, 1, frame.depth.size());
     resolveAttributes(d, camera, frame, blocks, 0, threadsOf(options));
   }

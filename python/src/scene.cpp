@@ -16,6 +16,14 @@ const std::vector<glm::vec3>& SceneData::normals() const {
   return triangleNormals;
 }
 
+void SceneData::render(const hsr::Camera& camera, const hsr::RenderOptions& options, hsr::Frame& frame) const {
+  std::unique_lock lock(rendererMutex, std::try_to_lock);
+  if (!lock.owns_lock()) return hsr::render(scene, camera, options, frame);  // in use by another call
+  if (!renderer || renderer->options().algorithm != options.algorithm || renderer->options().params != options.params)
+    renderer.emplace(scene, options);
+  renderer->render(camera, options, frame);
+}
+
 std::shared_ptr<SceneData> makeSceneData(hsr::Scene&& scene, std::vector<int32_t> instances) {
   auto data = std::make_shared<SceneData>();
   data->scene = std::move(scene);

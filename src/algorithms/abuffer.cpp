@@ -135,10 +135,13 @@ bool facesChangeNearby(const CameraSpaceBvh& bvh, const Scene& scene, Cull cull,
   return false;
 }
 
-void abuffer(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams&,
-             Frame& frame) {
-  abufferFrame(scene, camera, options, frame, nullptr);
-}
+class ABuffer final : public SceneAlgorithm {
+ public:
+  using SceneAlgorithm::SceneAlgorithm;
+  void render(const Camera& camera, const RenderOptions& options, Frame& frame) override {
+    abufferFrame(scene_, camera, options, frame, nullptr);
+  }
+};
 
 }  // namespace
 
@@ -205,7 +208,7 @@ AlgorithmInfo abufferAlgorithm() {
   a.source = "KTH report, lecture notes";
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.guarantee.condition = "its ids are the reference's nearest fragments";
-  a.run = abuffer;
+  a.create = factoryOf<ABuffer>();
   return a;
 }
 

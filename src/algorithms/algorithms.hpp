@@ -1,28 +1,40 @@
-// The visibility algorithms' declarations, one per file (src/algorithms/NAME.cpp), listed by
-// the registry (registry.cpp), and what render() and the algorithms share. An algorithm fills
-// the whole Frame (visibility buffer + statistics) from a finalized scene and a resolved camera;
-// render() hands it sized but not cleared (Frame::allocate): it writes every pixel of the
-// buffers present, or calls Frame::clear() first (the drawing service, draw.hpp, does).
+// What the visibility algorithms share (one per file, src/algorithms/NAME.cpp, each listed by one
+// line in registry.cpp): the base of their objects, the painting-order capability, and helpers
+// render() and the algorithms use. An algorithm object fills the whole Frame (visibility buffer +
+// statistics) from its scene and a resolved camera; render() hands it sized but not cleared
+// (Frame::allocate): it writes every pixel of the buffers present, or calls Frame::clear() first
+// (the drawing service, draw.hpp, does).
 #pragma once
 #include <hsr/algorithm.hpp>
 #include <hsr/bsp.hpp>
 #include <hsr/render.hpp>
+
+#include <memory>
 
 #include "algorithms/draw.hpp"
 #include "algorithms/polygon_split.hpp"
 
 namespace hsr::algo {
 
-AlgorithmInfo zbufferAlgorithm();  // zbuffer.cpp: the textbook z-buffer, and the tiled one's dispatch
-AlgorithmInfo raycastAlgorithm();  // raycast.cpp: the exact reference
-AlgorithmInfo bspAlgorithm();      // bsp.cpp: a BSP tree painted back to front
-AlgorithmInfo painterAlgorithm();         // painter.cpp
-AlgorithmInfo reversePainterAlgorithm();  // reverse_painter.cpp
-AlgorithmInfo sortedZbufferAlgorithm();   // sorted_zbuffer.cpp
-AlgorithmInfo hzbAlgorithm();             // hzb.cpp: Greene's hierarchical z-buffer
-AlgorithmInfo midpointAlgorithm();        // midpoint.cpp: the Ukrainian paper's midpoint subdivision
-AlgorithmInfo newellAlgorithm();          // newell.cpp: Newell-Newell-Sancha depth sort
-AlgorithmInfo abufferAlgorithm();         // abuffer.cpp: the exact colour reference for transparency
+/// The base of the registry's algorithm objects: the scene and checked parameters it was made
+/// with, and the drawing service's per-pixel buffers, kept from one view to the next.
+class SceneAlgorithm : public Algorithm {
+ public:
+  SceneAlgorithm(const Scene& scene, const AlgorithmParams& params) : scene_(scene), params_(params) {}
+
+ protected:
+  const Scene& scene_;
+  const AlgorithmParams params_;
+  DrawBuffers buffers_;
+};
+
+/// The registry's factory of algorithm class A, made as A(scene, params).
+template <class A>
+AlgorithmFactory factoryOf() {
+  return [](const Scene& scene, const AlgorithmParams& params) -> std::unique_ptr<Algorithm> {
+    return std::make_unique<A>(scene, params);
+  };
+}
 
 /// Whether any face of the scene has an opacity below 1 (alpha < 255) (abuffer.cpp): then the
 /// list-priority algorithms blend in their order and the z-buffer family adds a transparent pass.
@@ -47,12 +59,6 @@ ColorError colorError(const Frame& frame, const Frame& reference, const std::vec
 void abufferFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame,
                   std::vector<uint8_t>* nearEdge);
 
-/// The scene's BSP tree (built once per scene and options, bsp.cpp) drawn in its order from the
-/// camera, back to front or front to back, under `rule`; fills the statistics and the tree's
-/// details (nodes, fragments, splits, depth, built, build_ms).
-void drawInBspOrder(const Scene& scene, const Camera& camera, const RenderOptions& options,
-                    const BspBuildOptions& build, WriteRule rule, DrawRaster raster, bool frontToBack, Frame& frame);
-
 /// A painting order as polygons, back to front: what painter, newell and bsp draw from a camera,
 /// and what the vector output (io/svg.cpp) writes.
 struct PaintedPolygons {
@@ -60,10 +66,35 @@ struct PaintedPolygons {
   std::vector<PolygonRef> polygons;  // back to front, each a part of (or all of) a scene face
   std::vector<uint32_t> triangles;   // per polygon: a scene triangle of its face (its shading)
 };
-/// The painting order of the algorithm with these parameters (painter.cpp, newell.cpp, bsp.cpp).
-void painterPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out);
-void newellPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out);
-void bspPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out);
+/// The capability Capability::PaintsInOrder: an algorithm object that declares it also derives
+/// from this, and gives its painting order for a camera.
+class PaintsInOrder {
+ public:
+  virtual ~PaintsInOrder() = default;
+  virtual void paintedPolygons(const Camera& camera, PaintedPolygons& out) = 0;
+};
+
+/// A scene's BSP tree with its fragments as a scene the drawing service draws (bsp.cpp): built
+/// at the first frame that needs it and kept by the algorithm object that owns it (bsp, and
+/// reverse-painter in the tree's order).
+class BspDrawing {
+ public:
+  explicit BspDrawing(const BspBuildOptions& build);
+  ~BspDrawing();
+  /// The tree drawn in its order from the camera, back to front or front to back, under `rule`;
+  /// fills the statistics and the tree's details (nodes, fragments, splits, depth, built, build_ms).
+  void draw(const Scene& scene, const Camera& camera, const RenderOptions& options, WriteRule rule,
+            DrawRaster raster, bool frontToBack, DrawBuffers& buffers, Frame& frame);
+  /// The tree's fragments back to front from the camera.
+  void polygons(const Scene& scene, const Camera& camera, PaintedPolygons& out);
+
+  struct Built;  // the tree and its fragments as a scene (bsp.cpp)
+
+ private:
+  bool build(const Scene& scene);  // true when it built now
+  BspBuildOptions options_;
+  std::unique_ptr<Built> built_;
+};
 
 /// What a list-priority algorithm ordering faces by one sort key fails on (painter.cpp): the
 /// painter's with that key, and the reverse painter's with that order (the same image).
@@ -75,26 +106,49 @@ std::vector<std::string> listPriorityFailureScenes(const std::string& key);
 /// their triangles drawn with a depth test at every pixel).
 void zbufferOcclusionCulled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
 
-/// The textbook z-buffer region by region with a z-buffer of one region's size (region=WxH), and
-/// with half the depth range per frame instead of a clear (clear=half-range): zbuffer_memory.cpp.
+/// The textbook z-buffer region by region with a z-buffer of one region's size (region=WxH):
+/// zbuffer_memory.cpp.
 void zbufferInRegions(const Scene& scene, const Camera& camera, const RenderOptions& options, int regionWidth,
-                      int regionHeight, Frame& frame);
-void zbufferHalfRange(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
+                      int regionHeight, DrawBuffers& buffers, Frame& frame);
 
-/// The production z-buffer: binned, tiled, SIMD, multithreaded (zbuffer_tiled.cpp).
-void zbufferTiled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
+/// The textbook z-buffer with half the depth range per frame instead of a clear (clear=half-range,
+/// zbuffer_memory.cpp): the buffer it keeps between frames is this object's.
+class HalfRangeZBuffer {
+ public:
+  HalfRangeZBuffer();
+  ~HalfRangeZBuffer();
+  void draw(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
+
+  struct Buffer;  // of one depth format (zbuffer_memory.cpp)
+
+ private:
+  std::unique_ptr<Buffer> buffer_;  // for the last frame's size and depth format
+};
+
+/// The production z-buffer: binned, tiled, SIMD, multithreaded (zbuffer_tiled.cpp), with the
+/// bins, tile buffers and occlusion buffer it keeps from one frame to the next.
+class TiledZBuffer {
+ public:
+  TiledZBuffer();
+  ~TiledZBuffer();
+  void draw(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 /// Adds the frame's sized buffers to st.memory ("frame.depth", "frame.color", ...): part of every
 /// algorithm's memory.
 void addFrameMemory(Stats& st, const Frame& frame);
 
 /// Starts a frame's statistics: image size, faces and triangles of the scene, all else zero
-/// (render.cpp; render() starts every frame's statistics so, as does the occlusion buffer).
+/// (frame_stats.cpp; render() starts every frame's statistics so, as does the occlusion buffer).
 /// The storage of `st`'s lists is kept for the frame.
 void beginStats(Stats& st, const Scene& scene, const Camera& camera);
 
 /// Throws InputError unless the camera's image size is in 1..kMaxImageSize and the depth format
-/// suits the camera (render.cpp; also checked by the occlusion buffer).
+/// suits the camera (frame_stats.cpp; checked by render() and the occlusion buffer).
 void checkImage(const Camera& camera, DepthFormat format);
 
 /// Whether the occlusion buffer culls this scene mesh by mesh (occlusion.cpp: at least 64

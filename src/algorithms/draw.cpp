@@ -55,11 +55,12 @@ class FragmentWriter {
   static constexpr bool kDepth = R == WriteRule::DepthTest || R == WriteRule::DepthTestBlend;
 
   FragmentWriter(std::span<const SetupTriangle> tris, const Camera& cam, const RenderOptions& opt,
-                 const TriangleShader& shade, Frame& frame, const DerivedScene* derived)
+                 const TriangleShader& shade, DrawBuffers& buffers, Frame& frame, const DerivedScene* derived)
       : tris_(tris), cam_(cam), opt_(opt), shade_(shade), frame_(frame), derived_(derived),
         keepWinner_(R != WriteRule::DepthTest || opt.outputs != FrameOutputs::DepthOnly),
         color_(has(opt.outputs, FrameOutputs::Color)),
-        clear_(quantizeDepth<S>(opt.depthFormat.clearValue())) {
+        clear_(quantizeDepth<S>(opt.depthFormat.clearValue())), depth_(buffers.depth<T>()),
+        winner_(buffers.winner()) {
     const size_t pixels = size_t(cam.width) * size_t(cam.height);
     if constexpr (kDepth) depth_.assign(pixels, clear_);
     else depth_.clear();
@@ -202,9 +203,9 @@ class FragmentWriter {
   const DerivedScene* derived_;
   const bool keepWinner_, color_;
   const T clear_;
-  std::vector<T>& depth_ = scratch<T, Scratch::Depth>();  // DepthTest: the stored values
+  std::vector<T>& depth_;  // DepthTest: the stored values
   // Per pixel: 1 + the index of the last fragment's triangle, 0 = none.
-  std::vector<uint32_t>& winner_ = scratch<uint32_t, Scratch::Winner>();
+  std::vector<uint32_t>& winner_;
   std::vector<Rgba8> colors_;     // per triangle: its colour (shadeTriangles)
   std::vector<double> nearest_;   // DepthTestBlend: the eye depth of the winner's fragment
   std::vector<UnderSum> sums_;    // BlendUnder: each pixel's blend so far
@@ -225,8 +226,9 @@ std::vector<std::vector<uint32_t>> binTriangles(std::span<const SetupTriangle> t
 // tile by tile on the pool (each tile's pixels are its own; counters summed in tile order).
 template <WriteRule R, DepthStorage S, DepthMapping M>
 void drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const Camera& cam, const RenderOptions& opt,
-                  const TriangleShader& shade, Frame& frame, DrawCounters& counters, const DerivedScene* derived) {
-  FragmentWriter<R, S, M> writer(tris, cam, opt, shade, frame, derived);
+              const TriangleShader& shade, DrawBuffers& buffers, Frame& frame, DrawCounters& counters,
+              const DerivedScene* derived) {
+  FragmentWriter<R, S, M> writer(tris, cam, opt, shade, buffers, frame, derived);
   const int threads = resolveThreads(opt.threads);
   // The reverse painter's stops where every pixel is written: nothing more can show.
   auto full = [](const DrawCounters& n, uint64_t pixels) {
@@ -307,17 +309,17 @@ DrawRaster drawRasterOf(const AlgorithmParams& params) {
 }
 
 void drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawRaster raster, const Camera& camera,
-                 const RenderOptions& options, const TriangleShader& shade, Frame& frame, DrawCounters& counters,
-                 const DerivedScene* derived) {
+                 const RenderOptions& options, const TriangleShader& shade, DrawBuffers& buffers, Frame& frame,
+                 DrawCounters& counters, const DerivedScene* derived) {
   frame.clear(options.background, resolveThreads(options.threads));
   auto withRule = [&]<WriteRule R>() {
     if constexpr (R == WriteRule::DepthTest || R == WriteRule::DepthTestBlend)
       visitDepthFormat(options.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
-        drawWith<R, S, M>(triangles, raster, camera, options, shade, frame, counters, derived);
+        drawWith<R, S, M>(triangles, raster, camera, options, shade, buffers, frame, counters, derived);
       });
     else  // no depth buffer: one instance
-      drawWith<R, DepthStorage::F32, DepthMapping::Reversed>(triangles, raster, camera, options, shade, frame,
-                                                             counters, derived);
+      drawWith<R, DepthStorage::F32, DepthMapping::Reversed>(triangles, raster, camera, options, shade, buffers,
+                                                             frame, counters, derived);
   };
   switch (rule) {
     case WriteRule::DepthTest: return withRule.template operator()<WriteRule::DepthTest>();
@@ -330,7 +332,8 @@ void drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawR
 }
 
 void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& options, WriteRule rule,
-               DrawRaster raster, const OrderFn& order, Frame& frame, const DerivedScene* derived) {
+               DrawRaster raster, const OrderFn& order, DrawBuffers& buffers, Frame& frame,
+               const DerivedScene* derived) {
   Timer timer;
   Stats& st = frame.stats;
   const TriangleShader shade(scene, camera, options.shading);  // (the original scene's faces)
@@ -343,7 +346,7 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
     st.addTime("order", timer.lap());
   }
   DrawCounters n;
-  drawOrdered(triangles, rule, raster, camera, options, shade, frame, n, derived);
+  drawOrdered(triangles, rule, raster, camera, options, shade, buffers, frame, n, derived);
   st.addTime("raster", timer.lap());
 
   if (rule == WriteRule::DepthTest || rule == WriteRule::DepthTestBlend) st.depth_format = options.depthFormat.name();

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 #include "frontend/frontend.hpp"
@@ -41,14 +42,27 @@ const char* drawRasterName(DrawRaster raster);
 ParamSpec drawRasterParam(const char* defaultValue);
 DrawRaster drawRasterOf(const AlgorithmParams& params);
 
-/// Per-pixel scratch kept between frames on each calling thread: a frame rewrites warm pages
-/// instead of faulting fresh ones in (a drawing loop is not re-entered on one thread). One per use.
-enum class Scratch { Depth, Winner };
-template <class T, Scratch Use>
-std::vector<T>& scratch() {
-  thread_local std::vector<T> buffer;
-  return buffer;
-}
+/// The per-pixel buffers the drawing service draws with (a depth buffer of each storage type,
+/// the winning triangles), owned by the algorithm object that draws and kept from one frame to
+/// the next: a warm frame rewrites warm pages instead of faulting fresh ones in.
+class DrawBuffers {
+ public:
+  /// The depth buffer of values of type T (uint16_t, uint32_t or float: DepthT).
+  template <class T>
+  std::vector<T>& depth() {
+    if constexpr (std::is_same_v<T, uint16_t>) return depth16_;
+    else if constexpr (std::is_same_v<T, float>) return depthF32_;
+    else return depth32_;
+  }
+  /// Per pixel: 1 + the index of the winning (or last written) triangle, 0 = none.
+  std::vector<uint32_t>& winner() { return winner_; }
+
+ private:
+  std::vector<uint16_t> depth16_;
+  std::vector<uint32_t> depth32_;
+  std::vector<float> depthF32_;
+  std::vector<uint32_t> winner_;
+};
 
 /// The counters of the statistics, as every algorithm counts them.
 struct DrawCounters {
@@ -85,8 +99,8 @@ struct DerivedScene {
 /// `derived`, the triangles are its scene's, and ids and colours are mapped back (DerivedScene).
 /// Adds the buffers it used to frame.stats.memory.
 void drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawRaster raster, const Camera& camera,
-                 const RenderOptions& options, const TriangleShader& shade, Frame& frame, DrawCounters& counters,
-                 const DerivedScene* derived = nullptr);
+                 const RenderOptions& options, const TriangleShader& shade, DrawBuffers& buffers, Frame& frame,
+                 DrawCounters& counters, const DerivedScene* derived = nullptr);
 
 /// Puts the set-up triangles (submission order on entry) into drawing order.
 using OrderFn = std::function<void(std::vector<SetupTriangle>& triangles)>;
@@ -96,6 +110,7 @@ using OrderFn = std::function<void(std::vector<SetupTriangle>& triangles)>;
 /// common to every algorithm are filled (front-end counts, counters, memory, times "frontend",
 /// "order", "raster"), and the details "rasterizer" and "write_rule".
 void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& options, WriteRule rule,
-               DrawRaster raster, const OrderFn& order, Frame& frame, const DerivedScene* derived = nullptr);
+               DrawRaster raster, const OrderFn& order, DrawBuffers& buffers, Frame& frame,
+               const DerivedScene* derived = nullptr);
 
 }  // namespace hsr::algo

@@ -365,10 +365,18 @@ ObjectCounts drawByObjects(const Scene& scene, const Camera& camera, const Rende
   return c;
 }
 
-// A frame of the hierarchical z-buffer (`testTriangles`) or of the textbook z-buffer on its
+// What a frame on the pyramid does.
+struct PyramidUse {
+  bool frontToBack = false;   // faces nearest first (by their nearest vertex), else as submitted
+  bool testTriangles = true;  // the hierarchical z-buffer: each triangle tested against the pyramid
+  bool cull = false;          // occlusion culling: meshes tested against the pyramid before set-up
+};
+
+// A frame of the hierarchical z-buffer (use.testTriangles) or of the textbook z-buffer on its
 // pyramid (occlusion culling only), with or without occlusion culling.
-void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, bool frontToBack,
-               bool testTriangles, bool cull, Frame& frame) {
+void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, PyramidUse use,
+               Frame& frame) {
+  const bool frontToBack = use.frontToBack, testTriangles = use.testTriangles, cull = use.cull;
   Timer timer;
   Stats& st = frame.stats;
   const TriangleShader shade(scene, camera, options.shading);
@@ -418,17 +426,25 @@ void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& op
   });
 }
 
-void hzb(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
-         Frame& frame) {
-  drawFrame(scene, camera, options, params.text("order") == "front-to-back", true, params.flag("occlusion-cull"), frame);
-  frame.stats.setDetail("order", params.text("order"));
-  frame.stats.setDetail("pyramid_updates", "exact");
-}
+// The pyramid is rebuilt over each frame's depth buffer: the object keeps nothing between views.
+class Hzb final : public SceneAlgorithm {
+ public:
+  using SceneAlgorithm::SceneAlgorithm;
+  void render(const Camera& camera, const RenderOptions& options, Frame& frame) override {
+    drawFrame(scene_, camera, options,
+              {.frontToBack = params_.text("order") == "front-to-back",
+               .testTriangles = true,
+               .cull = params_.flag("occlusion-cull")},
+              frame);
+    frame.stats.setDetail("order", params_.text("order"));
+    frame.stats.setDetail("pyramid_updates", "exact");
+  }
+};
 
 }  // namespace
 
 void zbufferOcclusionCulled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame) {
-  drawFrame(scene, camera, options, /*frontToBack=*/false, /*testTriangles=*/false, /*cull=*/true, frame);
+  drawFrame(scene, camera, options, {.frontToBack = false, .testTriangles = false, .cull = true}, frame);
 }
 
 AlgorithmInfo hzbAlgorithm() {
@@ -444,7 +460,7 @@ AlgorithmInfo hzbAlgorithm() {
                "against the pyramid before any of its triangles is set up"}};
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.guarantee.condition = "a z-buffer in any order; ties of equal depth are ambiguous";
-  a.run = hzb;
+  a.create = factoryOf<Hzb>();
   return a;
 }
 

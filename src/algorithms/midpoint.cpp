@@ -273,6 +273,15 @@ void midpoint(const Scene& scene, const Camera& camera, const RenderOptions& opt
   });
 }
 
+// Each frame subdivides anew: the object keeps nothing between views.
+class Midpoint final : public SceneAlgorithm {
+ public:
+  using SceneAlgorithm::SceneAlgorithm;
+  void render(const Camera& camera, const RenderOptions& options, Frame& frame) override {
+    midpoint(scene_, camera, options, params_, frame);
+  }
+};
+
 }  // namespace
 
 AlgorithmInfo midpointAlgorithm() {
@@ -289,7 +298,7 @@ AlgorithmInfo midpointAlgorithm() {
   a.guarantee.kind = Guarantee::Kind::Approximate;
   a.guarantee.condition = "a nearer edge or a gap between the tested vertices and midpoint is not seen";
   a.guarantee.maxWrongFraction = 0.25;
-  a.run = midpoint;
+  a.create = factoryOf<Midpoint>();
   return a;
 }
 

@@ -457,8 +457,17 @@ void setCounts(Stats& st, const NewellCounts& c, uint64_t fragments) {
   st.setDetail("fragments", fragments);
 }
 
-void newell(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
-            Frame& frame) {
+// The sort is view-dependent: each frame sorts (and splits) anew; the object keeps nothing.
+class Newell final : public SceneAlgorithm, public PaintsInOrder {
+ public:
+  using SceneAlgorithm::SceneAlgorithm;
+  void render(const Camera& camera, const RenderOptions& options, Frame& frame) override;
+  void paintedPolygons(const Camera& camera, PaintedPolygons& out) override;
+};
+
+void Newell::render(const Camera& camera, const RenderOptions& options, Frame& frame) {
+  const Scene& scene = scene_;
+  const AlgorithmParams& params = params_;
   Timer timer;
   DepthSorter sorter(scene, camera, uint64_t(params.integer("max-fragments")));
   sorter.addInputs();
@@ -480,8 +489,7 @@ void newell(const Scene& scene, const Camera& camera, const RenderOptions& optio
     if (!std::is_sorted(tris.begin(), tris.end(), byFace)) std::stable_sort(tris.begin(), tris.end(), byFace);
   };
   drawScene(scene, camera, options, hasTransparency(scene) ? WriteRule::Blend : WriteRule::Overwrite,
-            drawRasterOf(params), inPaintingOrder, frame,
-            &derived.derived);
+            drawRasterOf(params), inPaintingOrder, buffers_, frame, &derived.derived);
   Stats& st = frame.stats;
   st.addTime("depth_sort", sortMs);
   st.addTime("fragments", deriveMs);
@@ -492,15 +500,15 @@ void newell(const Scene& scene, const Camera& camera, const RenderOptions& optio
                derived.scene.positions.capacity() * sizeof(dvec3) + derived.scene.triangles.capacity() * sizeof(Triangle));
 }
 
-}  // namespace
-
-void newellPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out) {
-  DepthSorter sorter(scene, camera, uint64_t(params.integer("max-fragments")));
+void Newell::paintedPolygons(const Camera& camera, PaintedPolygons& out) {
+  DepthSorter sorter(scene_, camera, uint64_t(params_.integer("max-fragments")));
   sorter.addInputs();
   sorter.sort();
   std::vector<bool> gained;
   sorter.result(out.vertices, out.polygons, out.triangles, gained);
 }
+
+}  // namespace
 
 AlgorithmInfo newellAlgorithm() {
   AlgorithmInfo a;
@@ -514,7 +522,8 @@ AlgorithmInfo newellAlgorithm() {
       drawRasterParam("binned"),
   };
   a.guarantee.kind = Guarantee::Kind::Exact;
-  a.run = newell;
+  a.capability = Capability::PaintsInOrder;
+  a.create = factoryOf<Newell>();
   return a;
 }
 

@@ -79,6 +79,7 @@ struct OcclusionBuffer::Impl {
   DepthSetup depth;
   Camera camera;
   Stats stats;
+  Stats passStats;  // one pass's statistics before they are added (its details' storage reused)
   int threads = 1;
   int width = 0, height = 0;  // of the last completed render (0: nothing rendered)
 
@@ -152,9 +153,8 @@ int OcclusionBuffer::height() const { return impl_->height; }
 
 namespace {
 
-// The statistics of one pass's front end and tile pass, added to `st`.
-void addPassStats(Stats& st, const algo::TiledState& pass, const tiled::RasterCounters& counters) {
-  thread_local Stats part;  // (kept: its details' storage is reused from pass to pass)
+// The statistics of one pass's front end and tile pass, added to `st` through `part`.
+void addPassStats(Stats& st, Stats& part, const algo::TiledState& pass, const tiled::RasterCounters& counters) {
   part.details.clear();
   algo::tiledStats(part, pass.fe, &pass.bins, counters);
   st.addCounts(part);
@@ -190,7 +190,7 @@ void OcclusionBuffer::Impl::tilePass(algo::TiledState& pass, bool first, Stats& 
   });
   tiled::RasterCounters counters;
   for (size_t tile = 0; tile < size_t(bins.tileCount()); ++tile) counters.add(pass.counters[tile]);
-  addPassStats(st, pass, counters);
+  addPassStats(st, passStats, pass, counters);
 }
 
 // The vertex pass for the vertices of `meshes` (ascending; Scene::meshVerticesApart), in runs of

@@ -13,42 +13,46 @@
 namespace hsr::algo {
 namespace {
 
-void painter(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
-             Frame& frame) {
-  const SortKey key = sortKeyOf(params.text("sort-key"));
-  drawScene(scene, camera, options, hasTransparency(scene) ? WriteRule::Blend : WriteRule::Overwrite,
-            drawRasterOf(params),
-            byFaceRank(faceRanks(faceKeys(scene, camera, key), /*backToFront=*/true)), frame);
-  frame.stats.setDetail("sort_key", params.text("sort-key"));
-}
+class Painter final : public SceneAlgorithm, public PaintsInOrder {
+ public:
+  using SceneAlgorithm::SceneAlgorithm;
+
+  void render(const Camera& camera, const RenderOptions& options, Frame& frame) override {
+    const SortKey key = sortKeyOf(params_.text("sort-key"));
+    drawScene(scene_, camera, options, hasTransparency(scene_) ? WriteRule::Blend : WriteRule::Overwrite,
+              drawRasterOf(params_), byFaceRank(faceRanks(faceKeys(scene_, camera, key), /*backToFront=*/true)),
+              buffers_, frame);
+    frame.stats.setDetail("sort_key", params_.text("sort-key"));
+  }
+
+  // Each face as its polygon (its triangles when it is not convex and planar), faces by rank.
+  void paintedPolygons(const Camera& camera, PaintedPolygons& out) override {
+    const std::vector<uint32_t> rank =
+        faceRanks(faceKeys(scene_, camera, sortKeyOf(params_.text("sort-key"))), /*backToFront=*/true);
+    struct Entry {
+      uint32_t rank;
+      PolygonRef polygon;
+      uint32_t triangle;
+    };
+    std::vector<Entry> entries;
+    out.vertices.clear();
+    forEachConvexPolygon(scene_, sceneEpsilon(scene_),
+                         [&](std::span<const dvec3> vertices, const SplitPlane&, uint32_t face, uint32_t triangle) {
+                           entries.push_back(
+                               {rank[face], {uint32_t(out.vertices.size()), uint32_t(vertices.size()), face}, triangle});
+                           out.vertices.insert(out.vertices.end(), vertices.begin(), vertices.end());
+                         });
+    std::stable_sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.rank < b.rank; });
+    out.polygons.clear();
+    out.triangles.clear();
+    for (const Entry& e : entries) {
+      out.polygons.push_back(e.polygon);
+      out.triangles.push_back(e.triangle);
+    }
+  }
+};
 
 }  // namespace
-
-// Each face as its polygon (its triangles when it is not convex and planar), faces by rank.
-void painterPolygons(const Scene& scene, const Camera& camera, const AlgorithmParams& params, PaintedPolygons& out) {
-  const std::vector<uint32_t> rank =
-      faceRanks(faceKeys(scene, camera, sortKeyOf(params.text("sort-key"))), /*backToFront=*/true);
-  struct Entry {
-    uint32_t rank;
-    PolygonRef polygon;
-    uint32_t triangle;
-  };
-  std::vector<Entry> entries;
-  out.vertices.clear();
-  forEachConvexPolygon(scene, sceneEpsilon(scene),
-                       [&](std::span<const dvec3> vertices, const SplitPlane&, uint32_t face, uint32_t triangle) {
-                         entries.push_back({rank[face], {uint32_t(out.vertices.size()), uint32_t(vertices.size()), face},
-                                            triangle});
-                         out.vertices.insert(out.vertices.end(), vertices.begin(), vertices.end());
-                       });
-  std::stable_sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) { return a.rank < b.rank; });
-  out.polygons.clear();
-  out.triangles.clear();
-  for (const Entry& e : entries) {
-    out.polygons.push_back(e.polygon);
-    out.triangles.push_back(e.triangle);
-  }
-}
 
 Guarantee listPriorityFailures(const std::string& key) {
   Guarantee g;
@@ -73,7 +77,8 @@ AlgorithmInfo painterAlgorithm() {
               drawRasterParam("binned")};
   a.guaranteeFor = [](const AlgorithmParams& p) { return listPriorityFailures(p.text("sort-key")); };
   a.guarantee = listPriorityFailures("centroid");
-  a.run = painter;
+  a.capability = Capability::PaintsInOrder;
+  a.create = factoryOf<Painter>();
   return a;
 }
 

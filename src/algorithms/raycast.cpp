@@ -11,8 +11,7 @@
 namespace hsr::algo {
 namespace {
 
-void raycast(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams&,
-             Frame& frame) {
+void raycast(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame) {
   Timer timer;
   frame.resize(camera.width, camera.height, options.background, resolveThreads(options.threads));
   const CameraSpaceBvh bvh(scene, camera);
@@ -61,6 +60,15 @@ void raycast(const Scene& scene, const Camera& camera, const RenderOptions& opti
   addFrameMemory(st, frame);
 }
 
+// The reference keeps nothing between views: each builds its camera-space BVH anew.
+class Raycast final : public SceneAlgorithm {
+ public:
+  using SceneAlgorithm::SceneAlgorithm;
+  void render(const Camera& camera, const RenderOptions& options, Frame& frame) override {
+    raycast(scene_, camera, options, frame);
+  }
+};
+
 }  // namespace
 
 AlgorithmInfo raycastAlgorithm() {
@@ -70,7 +78,7 @@ AlgorithmInfo raycastAlgorithm() {
   a.source = "KTH thesis";
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.guarantee.condition = "it is the reference";
-  a.run = raycast;
+  a.create = factoryOf<Raycast>();
   return a;
 }
 

@@ -1,6 +1,6 @@
 // The algorithm registry: one line per algorithm (each declares itself in its own file,
 // src/algorithms/NAME.cpp), the parameter checks of --param, and the guarantee's wording.
-// Read by render(), the command line (`hsr algorithms`) and the conformance tests.
+// Read by Renderer, the command line (`hsr algorithms`) and the conformance tests.
 #include <hsr/algorithm.hpp>
 #include <hsr/common.hpp>
 
@@ -8,27 +8,37 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "algorithms/algorithms.hpp"
+// The built-in algorithms, one line each, in the order `hsr algorithms` lists them: X(name) is
+// `AlgorithmInfo name##Algorithm()`, defined in the algorithm's own file.
+#define HSR_ALGORITHMS(X) \
+  X(zbuffer)              \
+  X(raycast)              \
+  X(painter)              \
+  X(reversePainter)       \
+  X(sortedZbuffer)        \
+  X(bsp)                  \
+  X(hzb)                  \
+  X(midpoint)             \
+  X(newell)               \
+  X(abuffer)
 
 namespace hsr {
+namespace algo {
+#define HSR_DECLARE_ALGORITHM(name) AlgorithmInfo name##Algorithm();
+HSR_ALGORITHMS(HSR_DECLARE_ALGORITHM)
+#undef HSR_DECLARE_ALGORITHM
+}  // namespace algo
+
 namespace {
 
 void checkDeclaration(const AlgorithmInfo& a);
 
-std::vector<AlgorithmInfo>& registry() {
-  static std::vector<AlgorithmInfo> list = [] {
-    std::vector<AlgorithmInfo> builtIn = {
-      algo::zbufferAlgorithm(),
-      algo::raycastAlgorithm(),
-      algo::painterAlgorithm(),
-      algo::reversePainterAlgorithm(),
-      algo::sortedZbufferAlgorithm(),
-      algo::bspAlgorithm(),
-      algo::hzbAlgorithm(),
-      algo::midpointAlgorithm(),
-      algo::newellAlgorithm(),
-      algo::abufferAlgorithm(),
-    };
+// A deque: registerAlgorithm appends without moving the entries findAlgorithm handed out.
+std::deque<AlgorithmInfo>& registry() {
+  static std::deque<AlgorithmInfo> list = [] {
+#define HSR_LIST_ALGORITHM(name) algo::name##Algorithm(),
+    std::deque<AlgorithmInfo> builtIn = {HSR_ALGORITHMS(HSR_LIST_ALGORITHM)};
+#undef HSR_LIST_ALGORITHM
     for (const AlgorithmInfo& a : builtIn) checkDeclaration(a);
     return builtIn;
   }();
@@ -92,7 +102,8 @@ std::string checkedValue(const AlgorithmInfo& algorithm, const ParamSpec& p, con
 }
 
 void checkDeclaration(const AlgorithmInfo& a) {
-  if (a.name.empty() || !a.run) throw std::invalid_argument("registerAlgorithm: an algorithm needs a name and a run");
+  if (a.name.empty() || !a.create)
+    throw std::invalid_argument("registerAlgorithm: an algorithm needs a name and a create");
   for (const ParamSpec& p : a.params) {
     if (p.type == ParamType::Choice && p.choices.empty())
       throw std::invalid_argument("registerAlgorithm: " + a.name + "'s " + p.name + " has no choices");
@@ -151,7 +162,7 @@ std::pair<int64_t, int64_t> AlgorithmParams::size(const std::string& name) const
   return {int64_t(std::stod(value.substr(0, x))), int64_t(std::stod(value.substr(x + 1)))};
 }
 
-const std::vector<AlgorithmInfo>& algorithms() { return registry(); }
+const std::deque<AlgorithmInfo>& algorithms() { return registry(); }
 
 const AlgorithmInfo* findAlgorithm(const std::string& name) {
   for (const AlgorithmInfo& a : registry())

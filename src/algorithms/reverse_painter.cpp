@@ -12,19 +12,27 @@
 namespace hsr::algo {
 namespace {
 
-void reversePainter(const Scene& scene, const Camera& camera, const RenderOptions& options,
-                    const AlgorithmParams& params, Frame& frame) {
-  const WriteRule rule = hasTransparency(scene) && has(options.outputs, FrameOutputs::Color) ? WriteRule::BlendUnder
-                                                                                             : WriteRule::WhereUnwritten;
-  if (params.text("order") == "bsp") {  // the BSP tree's exact order, reversed
-    drawInBspOrder(scene, camera, options, BspBuildOptions{}, rule, drawRasterOf(params), /*frontToBack=*/true, frame);
-  } else {
-    const SortKey key = sortKeyOf(params.text("order"));
-    drawScene(scene, camera, options, rule, drawRasterOf(params),
-              byFaceRank(faceRanks(faceKeys(scene, camera, key), /*backToFront=*/false)), frame);
+class ReversePainter final : public SceneAlgorithm {
+ public:
+  using SceneAlgorithm::SceneAlgorithm;
+
+  void render(const Camera& camera, const RenderOptions& options, Frame& frame) override {
+    const WriteRule rule = hasTransparency(scene_) && has(options.outputs, FrameOutputs::Color)
+                               ? WriteRule::BlendUnder
+                               : WriteRule::WhereUnwritten;
+    if (params_.text("order") == "bsp") {  // the BSP tree's exact order, reversed
+      tree_.draw(scene_, camera, options, rule, drawRasterOf(params_), /*frontToBack=*/true, buffers_, frame);
+    } else {
+      const SortKey key = sortKeyOf(params_.text("order"));
+      drawScene(scene_, camera, options, rule, drawRasterOf(params_),
+                byFaceRank(faceRanks(faceKeys(scene_, camera, key), /*backToFront=*/false)), buffers_, frame);
+    }
+    frame.stats.setDetail("order", params_.text("order"));
   }
-  frame.stats.setDetail("order", params.text("order"));
-}
+
+ private:
+  BspDrawing tree_{BspBuildOptions{}};  // order=bsp: the scored heuristic's tree, built at the first frame
+};
 
 }  // namespace
 
@@ -45,7 +53,7 @@ AlgorithmInfo reversePainterAlgorithm() {
     return exact;
   };
   a.guarantee = a.guaranteeFor(resolveParams(a, {}));
-  a.run = reversePainter;
+  a.create = factoryOf<ReversePainter>();
   return a;
 }
 

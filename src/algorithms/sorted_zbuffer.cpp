@@ -9,18 +9,22 @@
 namespace hsr::algo {
 namespace {
 
-void sortedZbuffer(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
-                   Frame& frame) {
-  const SortKey key = sortKeyOf(params.text("sort-key"));
-  std::vector<uint32_t> rank = faceRanks(faceKeys(scene, camera, key), /*backToFront=*/false);
-  // With transparency: the opaque faces front to back, then the transparent ones back to front,
-  // depth-tested without depth writes.
-  const bool transparent = hasTransparency(scene);
-  if (transparent) rank = transparentLast(scene, camera, rank, key);
-  drawScene(scene, camera, options, transparent ? WriteRule::DepthTestBlend : WriteRule::DepthTest,
-            drawRasterOf(params), byFaceRank(std::move(rank)), frame);
-  frame.stats.setDetail("sort_key", params.text("sort-key"));
-}
+class SortedZbuffer final : public SceneAlgorithm {
+ public:
+  using SceneAlgorithm::SceneAlgorithm;
+
+  void render(const Camera& camera, const RenderOptions& options, Frame& frame) override {
+    const SortKey key = sortKeyOf(params_.text("sort-key"));
+    std::vector<uint32_t> rank = faceRanks(faceKeys(scene_, camera, key), /*backToFront=*/false);
+    // With transparency: the opaque faces front to back, then the transparent ones back to front,
+    // depth-tested without depth writes.
+    const bool transparent = hasTransparency(scene_);
+    if (transparent) rank = transparentLast(scene_, camera, rank, key);
+    drawScene(scene_, camera, options, transparent ? WriteRule::DepthTestBlend : WriteRule::DepthTest,
+              drawRasterOf(params_), byFaceRank(std::move(rank)), buffers_, frame);
+    frame.stats.setDetail("sort_key", params_.text("sort-key"));
+  }
+};
 
 }  // namespace
 
@@ -34,7 +38,7 @@ AlgorithmInfo sortedZbufferAlgorithm() {
               drawRasterParam("binned")};
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.guarantee.condition = "a z-buffer in any order; ties of equal depth are ambiguous";
-  a.run = sortedZbuffer;
+  a.create = factoryOf<SortedZbuffer>();
   return a;
 }
 

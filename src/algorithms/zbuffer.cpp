@@ -46,7 +46,7 @@ void mergeNearer(const Frame& part, Frame& frame) {
 // inside the nearer one, away from its clipping plane, so the rounding of clipped edges leaves no
 // crack there; and where the nearer part shows anything, its nearest surface is the pixel's.
 void zbufferInSlices(const Scene& scene, const Camera& camera, const RenderOptions& options, DrawRaster raster,
-                     int slices, Frame& frame) {
+                     int slices, DrawBuffers& buffers, Frame& frame) {
   const double ratio = std::pow(camera.far / camera.near, 1.0 / slices);
   const Stats begun = frame.stats;  // what render() recorded: each part starts from it
   Stats total;
@@ -60,7 +60,7 @@ void zbufferInSlices(const Scene& scene, const Camera& camera, const RenderOptio
     if (s == slices - 2) part = frame;  // the buffers' sizes; drawScene clears them
     Frame& target = farthest ? frame : part;
     target.stats = begun;
-    drawScene(scene, slice, options, WriteRule::DepthTest, raster, /*order: submission*/ {}, target);
+    drawScene(scene, slice, options, WriteRule::DepthTest, raster, /*order: submission*/ {}, buffers, target);
     if (farthest) {
       total = frame.stats;
       continue;
@@ -81,40 +81,52 @@ void zbufferInSlices(const Scene& scene, const Camera& camera, const RenderOptio
 // (sort-key), depth-tested without depth writes (the tiled rasterizer's kernel has no such pass:
 // its transparent frames are drawn by the service's binned rasterizer).
 void zbufferWithTransparency(const Scene& scene, const Camera& camera, const RenderOptions& options,
-                             const std::string& raster, SortKey key, Frame& frame) {
+                             const std::string& raster, SortKey key, DrawBuffers& buffers, Frame& frame) {
   std::vector<uint32_t> submission(scene.faceCount());
   for (uint32_t f = 0; f < submission.size(); ++f) submission[f] = f;
   const DrawRaster r = raster == "scanline"                      ? DrawRaster::Scanline
                        : raster == "tiled" || raster == "binned" ? DrawRaster::Binned
                                                                  : DrawRaster::HalfSpace;
   drawScene(scene, camera, options, WriteRule::DepthTestBlend, r,
-            byFaceRank(transparentLast(scene, camera, submission, key)), frame);
+            byFaceRank(transparentLast(scene, camera, submission, key)), buffers, frame);
 }
+
+// The z-buffer's object: the buffers its ways of drawing keep from one frame to the next.
+class Zbuffer final : public SceneAlgorithm {
+ public:
+  using SceneAlgorithm::SceneAlgorithm;
+  void render(const Camera& camera, const RenderOptions& options, Frame& frame) override;
+
+ private:
+  void drawSaving(const Camera& camera, const RenderOptions& options, Frame& frame);
+  TiledZBuffer tiled_;          // raster=tiled
+  HalfRangeZBuffer halfRange_;  // clear=half-range
+};
 
 // region=WxH or clear=half-range: the textbook loop on the half-space rasterizer, alone.
-void zbufferSaving(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
-                   Frame& frame) {
-  const auto [rw, rh] = params.size("region");
-  const bool halfRange = params.text("clear") == "half-range";
+void Zbuffer::drawSaving(const Camera& camera, const RenderOptions& options, Frame& frame) {
+  const auto [rw, rh] = params_.size("region");
+  const bool halfRange = params_.text("clear") == "half-range";
   const char* what = halfRange ? "--param clear=half-range" : "--param region";
   if (halfRange && rw > 0) throw InputError("--param clear=half-range: keeps one whole-image buffer; drop --param region");
-  if (params.integer("depth-slices") > 1 || params.flag("occlusion-cull"))
+  if (params_.integer("depth-slices") > 1 || params_.flag("occlusion-cull"))
     throw InputError(std::string(what) + ": not with depth-slices or occlusion-cull (drop those)");
-  if (params.text("raster") == "scanline")
+  if (params_.text("raster") == "scanline")
     throw InputError(std::string(what) + ": draws on the half-space rasterizer (drop --param raster=scanline)");
-  if (halfRange) return zbufferHalfRange(scene, camera, options, frame);
-  zbufferInRegions(scene, camera, options, int(rw), int(rh), frame);
+  if (halfRange) return halfRange_.draw(scene_, camera, options, frame);
+  zbufferInRegions(scene_, camera, options, int(rw), int(rh), buffers_, frame);
 }
 
-void zbuffer(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
-             Frame& frame) {
-  const std::string& raster = params.text("raster");
+void Zbuffer::render(const Camera& camera, const RenderOptions& options, Frame& frame) {
+  const Scene& scene = scene_;
+  const std::string& raster = params_.text("raster");
   if (hasTransparency(scene))
-    return zbufferWithTransparency(scene, camera, options, raster, sortKeyOf(params.text("sort-key")), frame);
-  if (params.text("region") != "full" || params.text("clear") == "half-range")
-    return zbufferSaving(scene, camera, options, params, frame);
-  if (params.flag("occlusion-cull")) {
-    if (params.integer("depth-slices") > 1)
+    return zbufferWithTransparency(scene, camera, options, raster, sortKeyOf(params_.text("sort-key")), buffers_,
+                                   frame);
+  if (params_.text("region") != "full" || params_.text("clear") == "half-range")
+    return drawSaving(camera, options, frame);
+  if (params_.flag("occlusion-cull")) {
+    if (params_.integer("depth-slices") > 1)
       throw InputError("--param occlusion-cull=on: culls against one depth buffer over the whole range; drop "
                        "--param depth-slices");
     if (raster == "scanline")
@@ -123,20 +135,20 @@ void zbuffer(const Scene& scene, const Camera& camera, const RenderOptions& opti
     return zbufferOcclusionCulled(scene, camera, options, frame);
   }
   if (raster == "tiled") {
-    if (params.integer("depth-slices") > 1)
+    if (params_.integer("depth-slices") > 1)
       throw InputError("--param depth-slices: the tiled z-buffer draws the whole range at once; add --param "
                        "raster=binned (or halfspace, scanline) to draw it in parts");
     if (options.countWrites)
       throw InputError("--overdraw-image: zbuffer's tiled rasterizer does not count writes per pixel (it replaces "
                        "whole blocks at once); add --param raster=halfspace for the textbook z-buffer");
-    return zbufferTiled(scene, camera, options, frame);
+    return tiled_.draw(scene, camera, options, frame);
   }
   const DrawRaster textbook = raster == "scanline" ? DrawRaster::Scanline
                               : raster == "binned"  ? DrawRaster::Binned
                                                     : DrawRaster::HalfSpace;
-  if (const int slices = int(params.integer("depth-slices")); slices > 1)
-    return zbufferInSlices(scene, camera, options, textbook, slices, frame);
-  drawScene(scene, camera, options, WriteRule::DepthTest, textbook, /*order: submission*/ {}, frame);
+  if (const int slices = int(params_.integer("depth-slices")); slices > 1)
+    return zbufferInSlices(scene, camera, options, textbook, slices, buffers_, frame);
+  drawScene(scene, camera, options, WriteRule::DepthTest, textbook, /*order: submission*/ {}, buffers_, frame);
 }
 
 }  // namespace
@@ -173,7 +185,7 @@ AlgorithmInfo zbufferAlgorithm() {
                "less; the textbook loop on the half-space rasterizer, whatever raster says)"}};
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.guarantee.condition = "up to the depth format's precision: z-fighting is counted as ambiguous";
-  a.run = zbuffer;
+  a.create = factoryOf<Zbuffer>();
   return a;
 }
 

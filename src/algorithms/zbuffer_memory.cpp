@@ -7,8 +7,8 @@
 //   pixel sees the same fragments in the same order as with a whole-image buffer: the same image,
 //   bit for bit, with a region's buffer instead of an image's.
 //
-//   clear=half-range — "half the depth range per frame to avoid clearing": the buffer is kept in
-//   the Frame and not cleared between the frames drawn into it. Even frames store keys in the
+//   clear=half-range — "half the depth range per frame to avoid clearing": the buffer is kept by
+//   the algorithm object (HalfRangeZBuffer) and not cleared between the frames it draws. Even frames store keys in the
 //   lower half of the buffer's values (nearer = smaller), odd frames in the upper half (nearer =
 //   larger), so every key left by the frame before is farther than any of this frame's and loses
 //   its test as a cleared pixel would. A pixel not drawn this frame is reset to the boundary
@@ -74,7 +74,7 @@ std::vector<std::vector<uint32_t>> binByRegion(const std::vector<SetupTriangle>&
 
 template <DepthStorage S, DepthMapping M>
 void drawRegions(const std::vector<SetupTriangle>& tris, const Camera& camera, const RenderOptions& options,
-                 std::span<const Rgba8> colors, int rw, int rh, Frame& frame, DrawCounters& n) {
+                 std::span<const Rgba8> colors, int rw, int rh, DrawBuffers& buffers, Frame& frame, DrawCounters& n) {
   using Pixels = ZBufferPixels<S, M>;
   using T = typename Pixels::T;
   const int columns = (camera.width + rw - 1) / rw, rows = (camera.height + rh - 1) / rh;
@@ -82,8 +82,8 @@ void drawRegions(const std::vector<SetupTriangle>& tris, const Camera& camera, c
   const T clear = quantizeDepth<S>(options.depthFormat.clearValue());
   Timer timer;
   double clearMs = 0, rasterMs = 0, resolveMs = 0;
-  std::vector<T>& depth = scratch<T, Scratch::Depth>();  // the one z-buffer, a region's size
-  std::vector<uint32_t>& winner = scratch<uint32_t, Scratch::Winner>();  // 1 + the winning triangle, 0 = none
+  std::vector<T>& depth = buffers.depth<T>();  // the one z-buffer, a region's size
+  std::vector<uint32_t>& winner = buffers.winner();  // 1 + the winning triangle, 0 = none
   depth.resize(size_t(rw) * size_t(rh));
   winner.resize(depth.size());
   for (int ry = 0; ry < rows; ++ry)
@@ -161,10 +161,19 @@ struct HalfRangeKeys {
   static bool inHalf(K k, bool odd) { return odd ? k > kHalf + 1 : k < kHalf; }
 };
 
-// What a Frame keeps between half-range frames: the keys, the winners (valid where the key is in
-// the frame's half), the frame count and what the buffer was made for.
+}  // namespace
+
+// What the half-range z-buffer keeps between frames, of whichever depth format it was made for.
+struct HalfRangeZBuffer::Buffer {
+  virtual ~Buffer() = default;
+};
+
+namespace {
+
+// The keys, the winners (valid where the key is in the frame's half), the frame count and what
+// the buffer was made for.
 template <DepthStorage S, DepthMapping M>
-struct HalfRangeBuffer : KeptState::Base {
+struct HalfRangeBuffer : HalfRangeZBuffer::Buffer {
   using K = typename HalfRangeKeys<S, M>::K;
   int width = 0, height = 0;
   uint64_t frames = 0;
@@ -174,22 +183,23 @@ struct HalfRangeBuffer : KeptState::Base {
 
 template <DepthStorage S, DepthMapping M>
 void drawHalfRange(const std::vector<SetupTriangle>& tris, const Camera& camera, const RenderOptions& options,
-                   std::span<const Rgba8> colors, Frame& frame, DrawCounters& n) {
+                   std::span<const Rgba8> colors, std::unique_ptr<HalfRangeZBuffer::Buffer>& kept, Frame& frame,
+                   DrawCounters& n) {
   using Keys = HalfRangeKeys<S, M>;
   using Buffer = HalfRangeBuffer<S, M>;
   using T = DepthT<S>;
   Stats& st = frame.stats;
   Timer timer;
-  Buffer* buffer = frame.kept.get<Buffer>();
+  Buffer* buffer = dynamic_cast<Buffer*>(kept.get());
   const bool fresh = !buffer || buffer->width != camera.width || buffer->height != camera.height;
-  if (fresh) {  // the first frame into this Frame (or a new size or depth format): cleared once
+  if (fresh) {  // the first frame (or a new size or depth format): cleared once
     auto made = std::make_unique<Buffer>();
     made->width = camera.width;
     made->height = camera.height;
     made->keys.assign(size_t(camera.width) * size_t(camera.height), Keys::kBoundary);
     made->winner.assign(made->keys.size(), 0);
     buffer = made.get();
-    frame.kept.reset(std::move(made));
+    kept = std::move(made);
     st.addTime("clear", timer.lap());
   }
   const bool odd = buffer->frames % 2 == 1;
@@ -269,21 +279,24 @@ void drawWithFrontEnd(const Scene& scene, const Camera& camera, const RenderOpti
 }  // namespace
 
 void zbufferInRegions(const Scene& scene, const Camera& camera, const RenderOptions& options, int regionWidth,
-                      int regionHeight, Frame& frame) {
+                      int regionHeight, DrawBuffers& buffers, Frame& frame) {
   const int rw = std::min(regionWidth, camera.width), rh = std::min(regionHeight, camera.height);
   drawWithFrontEnd(scene, camera, options, frame, /*clearFrame=*/true,
                    [&]<DepthStorage S, DepthMapping M>(const std::vector<SetupTriangle>& tris,
                                                        std::span<const Rgba8> colors, DrawCounters& n) {
-                     drawRegions<S, M>(tris, camera, options, colors, rw, rh, frame, n);
+                     drawRegions<S, M>(tris, camera, options, colors, rw, rh, buffers, frame, n);
                    });
 }
 
-void zbufferHalfRange(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame) {
-  // (A Frame that changes depth format starts a new buffer: its kept state is of another type.)
+HalfRangeZBuffer::HalfRangeZBuffer() = default;
+HalfRangeZBuffer::~HalfRangeZBuffer() = default;
+
+void HalfRangeZBuffer::draw(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame) {
+  // (A frame of another depth format starts a new buffer: the kept one is of another type.)
   drawWithFrontEnd(scene, camera, options, frame, /*clearFrame=*/false,
                    [&]<DepthStorage S, DepthMapping M>(const std::vector<SetupTriangle>& tris,
                                                        std::span<const Rgba8> colors, DrawCounters& n) {
-                     drawHalfRange<S, M>(tris, camera, options, colors, frame, n);
+                     drawHalfRange<S, M>(tris, camera, options, colors, buffer_, frame, n);
                    });
 }
 

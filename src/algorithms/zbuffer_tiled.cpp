@@ -159,21 +159,29 @@ void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const Triangle
 
 }  // namespace
 
-void zbufferTiled(const Scene& scene, const Camera& cam, const RenderOptions& opt, Frame& frame) {
+// What the tiled z-buffer keeps from one frame to the next: its bins and tile buffers, and the
+// occlusion buffer of mesh culling.
+struct TiledZBuffer::State {
+  TiledState tiles;
+  OcclusionBuffer occluders;
+};
+
+TiledZBuffer::TiledZBuffer() = default;
+TiledZBuffer::~TiledZBuffer() = default;
+
+void TiledZBuffer::draw(const Scene& scene, const Camera& cam, const RenderOptions& opt, Frame& frame) {
   Timer timer;
   Stats& st = frame.stats;
   Counters n;
   tiled::RasterCounters tiledCounters;
-  // The tiled path's buffers, kept for the next frame by the calling thread. (Used through this
-  // reference: in a lambda run by a pool worker, the name would denote the worker's own copy.)
-  thread_local TiledState callerState;
-  TiledState& state = callerState;
+  if (!state_) state_ = std::make_unique<State>();
+  TiledState& state = state_->tiles;
   const TriangleShader shade(scene, cam, opt.shading);  // back faces' colour, when they show
   st.setDetail("rasterizer", "tiled");
   st.depth_format = opt.depthFormat.name();
 
-  // Many meshes and enough triangles: mesh culling (docs/occlusion.md), through an occlusion
-  // buffer kept by the calling thread. Depth only: the buffer's passes, then its depth image (bit
+  // Many meshes and enough triangles: mesh culling (docs/occlusion.md), through the occlusion
+  // buffer this object keeps. Depth only: the buffer's passes, then its depth image (bit
   // for bit this path's). With ids: the buffer's first pass, then this path's frame of the meshes
   // not found hidden (algo::cullMeshes). Scenes of few triangles skip it: the kept tiles' extra
   // pass costs more than culling saves there (docs/benchmarks.md).
@@ -181,8 +189,7 @@ void zbufferTiled(const Scene& scene, const Camera& cam, const RenderOptions& op
   const bool depthOnly = opt.outputs == FrameOutputs::DepthOnly;
   const bool byMeshes = scene.triangles.size() >= kByMeshesTriangles &&
                         (depthOnly ? meshCullingApplies(scene, cam) : meshCullingPaysForFrame(scene, cam));
-  thread_local OcclusionBuffer callerOccluders;
-  OcclusionBuffer& occluders = callerOccluders;
+  OcclusionBuffer& occluders = state_->occluders;
   if (byMeshes && depthOnly) {
     occluders.render(scene, cam, {opt.depthFormat, opt.cull, opt.threads});
     timer.lap();

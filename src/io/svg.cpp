@@ -9,6 +9,8 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <memory>
+#include <stdexcept>
 
 #include "algorithms/algorithms.hpp"
 #include "core/shading.hpp"
@@ -89,20 +91,31 @@ double signedArea(const std::vector<dvec2>& poly) {
   return a;
 }
 
+// The names of the algorithms that declare Capability::PaintsInOrder, for messages.
+std::string paintingAlgorithms() {
+  std::string names;
+  for (const AlgorithmInfo& a : algorithms())
+    if (a.capability == Capability::PaintsInOrder) names += (names.empty() ? "" : ", ") + a.name;
+  return names;
+}
+
+// The order from the algorithm's object, made for this scene (the capability's interface).
 void paintingOrder(const Scene& scene, const Camera& camera, const RenderOptions& options, PaintedPolygons& out) {
   const AlgorithmInfo* algorithm = findAlgorithm(options.algorithm);
-  if (!algorithm || !paintsPolygons(options.algorithm))
-    throw InputError("--svg: " + options.algorithm + " paints no polygons (vector output needs painter, newell or bsp)");
-  const AlgorithmParams params = resolveParams(*algorithm, options.params);
-  if (options.algorithm == "painter") return algo::painterPolygons(scene, camera, params, out);
-  if (options.algorithm == "newell") return algo::newellPolygons(scene, camera, params, out);
-  return algo::bspPolygons(scene, camera, params, out);
+  if (!algorithm || algorithm->capability != Capability::PaintsInOrder)
+    throw InputError("--svg: " + options.algorithm + " paints no polygons (vector output needs " +
+                     paintingAlgorithms() + ")");
+  const std::unique_ptr<Algorithm> object = algorithm->create(scene, resolveParams(*algorithm, options.params));
+  auto* painter = dynamic_cast<algo::PaintsInOrder*>(object.get());
+  if (!painter) throw std::logic_error(options.algorithm + " declares PaintsInOrder but does not implement it");
+  painter->paintedPolygons(camera, out);
 }
 
 }  // namespace
 
 bool paintsPolygons(const std::string& algorithm) {
-  return algorithm == "painter" || algorithm == "newell" || algorithm == "bsp";
+  const AlgorithmInfo* found = findAlgorithm(algorithm);
+  return found && found->capability == Capability::PaintsInOrder;
 }
 
 std::string renderSvg(const Scene& scene, const Camera& camera, const RenderOptions& options) {

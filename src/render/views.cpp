@@ -11,6 +11,7 @@
 #include <atomic>
 #include <exception>
 #include <mutex>
+#include <optional>
 
 namespace hsr {
 
@@ -58,22 +59,26 @@ void renderViews(const Scene& scene, std::span<const Camera> cameras, const Rend
   const int threads = resolveThreads(options.threads);
   if (cameras.size() < size_t(threads) || threads == 1) {
     frames.resize(1);  // one after another, each view on every thread
+    Renderer renderer(scene, options);  // one algorithm object for every view
     for (size_t i = 0; i < cameras.size(); ++i) {
-      render(scene, cameras[i], options, frames[0]);
+      renderer.render(cameras[i], frames[0]);
       deliver(i, frames[0], threads);
     }
     return;
   }
-  // Whole views per thread: a frame per thread, reused from view to view.
+  // Whole views per thread: a frame and an algorithm object per thread, reused from view to view.
   RenderOptions single = options;
   single.threads = 1;
   frames.resize(static_cast<size_t>(threads));
+  std::vector<std::optional<Renderer>> renderers(static_cast<size_t>(threads));
   FirstError error;
   runParallel(cameras.size(), threads, [&](size_t i) {
     if (error.raised()) return;
     try {
-      Frame& frame = frames[currentPart()];
-      render(scene, cameras[i], single, frame);
+      const size_t part = currentPart();
+      Frame& frame = frames[part];
+      if (!renderers[part]) renderers[part].emplace(scene, single);
+      renderers[part]->render(cameras[i], frame);
       deliver(i, frame, 1);
     } catch (...) {
       error.keep();
