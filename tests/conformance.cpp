@@ -130,9 +130,11 @@ std::string judge(const Guarantee& g, const Outcome& o, bool failureScene, bool 
 }
 
 // The statistics as JSON without what differs from run to run by design: the times (time_ms,
-// and the algorithms' own details named *_ms) and whether this frame built a structure cached
-// with the scene (the BSP tree's "built": 1 on the first render only); with `threads` other than
-// 1, also the memory (memory_bytes and its buffers), which counts each worker's own scratch.
+// and the algorithms' own details named *_ms) and the details that tell the algorithm object's
+// history rather than the frame (the BSP tree's "built": 1 on the first render only; the
+// half-range buffer's frame count, half, first clear and pixels reset from the frame before);
+// with `threads` other than 1, also the memory (memory_bytes and its buffers), which counts each
+// worker's own scratch.
 std::string statsWithoutTimes(const Stats& stats, int threads = 1) {
   Stats copy = stats;
   copy.time_ms.clear();
@@ -140,8 +142,11 @@ std::string statsWithoutTimes(const Stats& stats, int threads = 1) {
     copy.memory_bytes = 0;
     copy.memory.clear();
   }
-  std::erase_if(copy.details,
-                [](const auto& detail) { return detail.first.ends_with("_ms") || detail.first == "built"; });
+  std::erase_if(copy.details, [](const auto& detail) {
+    for (const char* history : {"built", "frames_kept", "half", "cleared", "pixels_reset"})
+      if (detail.first == history) return true;
+    return detail.first.ends_with("_ms");
+  });
   return copy.toJson(-1);
 }
 
