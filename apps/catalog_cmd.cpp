@@ -1,5 +1,5 @@
 // `hsr algorithms` and `hsr scenes`: the registries of visibility algorithms and built-in scenes,
-// listed as text, JSON or (algorithms) Markdown parameter tables for docs/algorithms/NAME.md.
+// listed as text, JSON or (algorithms) the Markdown parameter tables of docs/algorithms/NAME.md.
 // Set up by apps/main.cpp's table; `hsr help algorithms` prints the same listing.
 #include <hsr/hsr.hpp>
 
@@ -9,6 +9,7 @@
 
 #include <memory>
 #include <sstream>
+#include <string_view>
 #include <tuple>
 
 #include "commands.hpp"
@@ -70,7 +71,67 @@ std::string wrapped(const std::string& text, const std::string& indent, size_t w
   return out;
 }
 
+// Text for a Markdown table cell: '|' and the characters that would start emphasis, code or
+// HTML escaped, line breaks as spaces.
+std::string markdownText(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '\n') c = ' ';
+    if (std::string_view("\\|*_`<").find(c) != std::string_view::npos) out += '\\';
+    out += c;
+  }
+  return out;
+}
+
+// The values a parameter allows, for the Markdown table.
+std::string markdownValues(const hsr::ParamSpec& p) {
+  switch (p.type) {
+    case hsr::ParamType::Choice: {
+      std::string values;
+      for (const std::string& c : p.choices) values += (values.empty() ? "`" : ", `") + c + "`";
+      return values;
+    }
+    case hsr::ParamType::Bool: return "`on`, `off`";
+    case hsr::ParamType::Size: return fmt::format("`WxH` (each {} to {}), `full`", p.min, p.max);
+    case hsr::ParamType::Int:
+    case hsr::ParamType::Real: break;
+  }
+  return fmt::format("{} to {}", p.min, p.max);
+}
+
+// An algorithm's parameters as a Markdown table: what docs/algorithms/NAME.md shows between its
+// "params" markers (scripts/docs-params.sh; tests/cli_test.cpp checks they agree).
+std::string markdownTable(const hsr::AlgorithmInfo& a) {
+  if (a.params.empty()) return "None.\n";
+  std::string table = "| `--param` | type | default | values | what |\n|---|---|---|---|---|\n";
+  for (const hsr::ParamSpec& p : a.params)
+    table += fmt::format("| `{}` | {} | `{}` | {} | {} |\n", p.name, hsr::paramTypeName(p.type), p.defaultValue,
+                         markdownValues(p), markdownText(p.help));
+  return table;
+}
+
+// `hsr algorithms --markdown [NAME]`: NAME's table, or every algorithm's under a heading.
+void printMarkdown(const std::string& name) {
+  if (!name.empty()) {
+    const hsr::AlgorithmInfo* a = hsr::findAlgorithm(name);
+    if (!a) throw InputError(fmt::format("algorithms '{}': unknown algorithm (known: {})", name, algorithmNames()));
+    fmt::print("{}", markdownTable(*a));
+    return;
+  }
+  const char* separator = "";
+  for (const hsr::AlgorithmInfo& a : hsr::algorithms()) {
+    fmt::print("{}## {}\n\n{}", separator, a.name, markdownTable(a));
+    separator = "\n";
+  }
+}
+
 }  // namespace
+
+std::string algorithmNames() {
+  std::string names;
+  for (const hsr::AlgorithmInfo& a : hsr::algorithms()) names += (names.empty() ? "" : ", ") + a.name;
+  return names;
+}
 
 void printAlgorithms() {
   for (const hsr::AlgorithmInfo& a : hsr::algorithms()) {
@@ -97,9 +158,21 @@ void printAlgorithms() {
 
 Runner setupAlgorithms(CLI::App& cmd) {
   auto json = std::make_shared<bool>(false);
-  cmd.add_flag("--json", *json, "Print a JSON array instead");
-  return [json] {
+  auto markdown = std::make_shared<bool>(false);
+  auto name = std::make_shared<std::string>();
+  CLI::Option* jsonFlag = cmd.add_flag("--json", *json, "Print a JSON array instead");
+  CLI::Option* markdownFlag =
+      cmd.add_flag("--markdown", *markdown,
+                   "Print each algorithm's parameter table in Markdown (name, type, default, values, help), each "
+                   "under a '## NAME' heading; with NAME, only that algorithm's table")
+          ->excludes(jsonFlag);
+  cmd.add_option("name", *name, "With --markdown: only this algorithm")->type_name("NAME")->needs(markdownFlag);
+  cmd.footer(
+      "docs/algorithms/NAME.md shows 'hsr algorithms --markdown NAME' between its params markers; "
+      "scripts/docs-params.sh regenerates them.");
+  return [json, markdown, name] {
     if (*json) fmt::print("{}\n", algorithmsJson().dump(2));
+    else if (*markdown) printMarkdown(*name);
     else printAlgorithms();
     return 0;
   };

@@ -28,6 +28,8 @@ Runner setupPrecision(CLI::App& cmd);   // precision_cmd.cpp
 
 /// The listing of `hsr algorithms` (and `hsr help algorithms`) on stdout.
 void printAlgorithms();
+/// The registered algorithms' names, comma-separated (catalog_cmd.cpp).
+std::string algorithmNames();
 
 /// Wall-clock milliseconds since `start`.
 inline double millisecondsSince(std::chrono::steady_clock::time_point start) {

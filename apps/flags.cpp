@@ -3,6 +3,8 @@
 // setup functions (declare) and runners (prepare).
 #include "flags.hpp"
 
+#include "commands.hpp"
+
 #include <fmt/core.h>
 
 #include <cctype>
@@ -123,12 +125,6 @@ Enum valueOf(const Names<Enum>& names, std::string name) {
   for (const auto& [key, value] : names)
     if (key == name) return value;
   throw std::logic_error("valueOf: '" + name + "' was not checked");
-}
-
-std::string algorithmNames() {
-  std::string names;
-  for (const hsr::AlgorithmInfo& a : hsr::algorithms()) names += (names.empty() ? "" : ", ") + a.name;
-  return names;
 }
 
 }  // namespace
