@@ -1,5 +1,6 @@
-// The subcommands that live in their own files (apps/NAME_cmd.cpp), for the table in
-// hsr_main.cpp: each declares its flags on its CLI11 app and returns the runner that does the work.
+// The subcommands, each in its own file (apps/NAME_cmd.cpp), for the table in apps/main.cpp: each
+// declares its flags on its CLI11 app and returns the runner that does the work once parsing
+// succeeded; and the small helpers several of them share.
 #pragma once
 #include <CLI/CLI.hpp>
 
@@ -9,12 +10,26 @@
 #include <string>
 #include <vector>
 
+#ifndef HSR_VERSION
+#define HSR_VERSION "0.1.0"  // normally set by CMake from project(VERSION)
+#endif
+
 namespace hsr::cli {
 
 using Runner = std::function<int()>;
 
-Runner setupPrecision(CLI::App& cmd);
-Runner setupCompare(CLI::App& cmd);
+Runner setupRender(CLI::App& cmd);      // render_cmd.cpp
+Runner setupBench(CLI::App& cmd);       // bench_cmd.cpp
+Runner setupAlgorithms(CLI::App& cmd);  // catalog_cmd.cpp
+Runner setupScenes(CLI::App& cmd);      // catalog_cmd.cpp
+Runner setupInfo(CLI::App& cmd);        // info_cmd.cpp
+Runner setupCompare(CLI::App& cmd);     // compare_cmd.cpp
+Runner setupPrecision(CLI::App& cmd);   // precision_cmd.cpp
+
+/// The listing of `hsr algorithms` (and `hsr help algorithms`) on stdout.
+void printAlgorithms();
+/// The registered algorithms' names, comma-separated (catalog_cmd.cpp).
+std::string algorithmNames();
 
 /// Wall-clock milliseconds since `start`.
 inline double millisecondsSince(std::chrono::steady_clock::time_point start) {

@@ -1,6 +1,7 @@
 // `hsr compare`: the source documents' comparisons as one experiment (apps/compare/), with a
 // table on stdout, DIR/results.json and the report DIR/index.html (docs/compare.md).
 #include <hsr/hsr.hpp>
+#include <hsr/threads.hpp>
 
 #include <fmt/core.h>
 
@@ -12,7 +13,6 @@
 #include <sstream>
 
 #include "commands.hpp"
-#include "core/parallel.hpp"
 #include "compare/study.hpp"
 
 #ifndef HSR_GIT_COMMIT

@@ -6,11 +6,11 @@
 #include <benchmark/benchmark.h>
 
 #include <hsr/hsr.hpp>
+#include <hsr/threads.hpp>
 #include <map>
 #include <memory>
 #include <string>
 
-#include "core/parallel.hpp"
 #include "frontend/frontend.hpp"
 #include "raster/tiled.hpp"
 

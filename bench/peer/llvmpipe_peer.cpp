@@ -7,8 +7,8 @@
 
 #include <CLI/CLI.hpp>
 #include <hsr/hsr.hpp>
+#include <hsr/threads.hpp>
 
-#include "core/parallel.hpp"
 #include "gl_projection.hpp"
 #include "id_compare.hpp"
 #define GL_GLEXT_PROTOTYPES 1  // libOpenGL (GLVND) exports every OpenGL 4.5 core entry point

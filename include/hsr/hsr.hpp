@@ -17,3 +17,4 @@
 #include <hsr/precision.hpp>
 #include <hsr/views.hpp>
 #include <hsr/svg.hpp>
+#include <hsr/threads.hpp>

@@ -3,6 +3,8 @@
 // inside an algorithm's inner loop. Work items are fixed by the caller, so results never depend
 // on the thread count as long as each index writes only its own outputs.
 #pragma once
+#include <hsr/threads.hpp>
+
 #include <atomic>
 #include <chrono>
 #include <cstddef>
@@ -13,17 +15,6 @@
 #include <vector>
 
 namespace hsr {
-
-/// How long the pool's threads spin before they sleep: a worker between jobs, the caller of a job
-/// for its workers (core/parallel.cpp). A benchmark that times another renderer right after hsr
-/// waits this long first, so that no spinning worker takes a core from it.
-inline constexpr std::chrono::microseconds kPoolSpin{200};
-
-inline int resolveThreads(int requested) {
-  if (requested > 0) return requested;
-  unsigned n = std::thread::hardware_concurrency();
-  return n ? int(n) : 1;
-}
 
 /// Work items [0, n) shared out among the `parts` threads of a parallel job (currentPart), each
 /// part with its own list: a thread takes the items of its own list first, in order, then helps

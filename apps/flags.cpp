@@ -1,0 +1,264 @@
+// The flags `hsr render` and `hsr bench` share (flags.hpp) and the parsers of flag values: each
+// parser throws InputError "--flag 'text': problem" (exit status 2). Called by the subcommands'
+// setup functions (declare) and runners (prepare).
+#include "flags.hpp"
+
+#include "commands.hpp"
+
+#include <fmt/core.h>
+
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <optional>
+#include <sstream>
+
+namespace hsr::cli {
+namespace {
+
+constexpr int kMaxImageSide = 16384;
+
+// A whole-string, finite number: "1e3" yes; "1e3x", "nan", "inf" no.
+bool parseFinite(std::string_view text, double& value) {
+  auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+  return ec == std::errc() && end == text.data() + text.size() && std::isfinite(value);
+}
+
+// Comma-separated finite numbers, minCount to maxCount of them; `form` shows the expected text.
+std::vector<double> parseNumbers(const std::string& flag, const std::string& text, size_t minCount, size_t maxCount,
+                                 const char* form) {
+  std::vector<double> values;
+  size_t start = 0;
+  bool ok = true;
+  while (ok) {
+    size_t comma = std::min(text.find(',', start), text.size());
+    double v;
+    ok = parseFinite(std::string_view(text).substr(start, comma - start), v);
+    values.push_back(v);
+    if (comma == text.size()) break;
+    start = comma + 1;
+  }
+  if (!ok || values.size() < minCount || values.size() > maxCount)
+    throw InputError(fmt::format("{} '{}': expected {} (finite numbers)", flag, text, form));
+  return values;
+}
+
+struct ImageSize {
+  int width = 0, height = 0;
+};
+
+// An OpenCV K whose principal point lies outside the image was most likely made for another
+// image size: say so (on stderr; the render goes on).
+void warnPrincipalPointOutside(const hsr::CameraSpec& spec, ImageSize size, const std::string& cameraName) {
+  if (spec.kind != hsr::CameraSpec::Kind::OpenCV) return;
+  const double cx = spec.K[0][2], cy = spec.K[1][2];
+  if (cx >= 0 && cx <= size.width && cy >= 0 && cy <= size.height) return;
+  fmt::print(stderr,
+             "hsr: warning: {}: K's principal point ({:g}, {:g}) lies outside the {}x{} image (give --size, or "
+             "'width' and 'height' in the camera JSON)\n",
+             cameraName, cx, cy, size.width, size.height);
+}
+ImageSize parseSize(const std::string& text) {
+  size_t x = text.find_first_of("xX");
+  ImageSize size;
+  auto side = [](std::string_view s, int& out) {
+    auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+    return ec == std::errc() && end == s.data() + s.size() && out >= 1 && out <= kMaxImageSide;
+  };
+  if (x == std::string::npos || !side(std::string_view(text).substr(0, x), size.width) ||
+      !side(std::string_view(text).substr(x + 1), size.height))
+    throw InputError(fmt::format("--size '{}': expected WIDTHxHEIGHT, each 1 to {}", text, kMaxImageSide));
+  return size;
+}
+
+hsr::Rgba8 parseColor(const std::string& text) {
+  std::vector<double> v = parseNumbers("--background", text, 3, 4, "r,g,b or r,g,b,a");
+  for (double c : v)
+    if (c < 0 || c > 255 || c != std::floor(c))
+      throw InputError("--background '" + text + "': components are integers 0 to 255");
+  return {uint8_t(v[0]), uint8_t(v[1]), uint8_t(v[2]), uint8_t(v.size() == 4 ? v[3] : 255)};
+}
+
+std::string readTextFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open: " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(path + ": cannot read: " + std::strerror(errno));
+  return text.str();
+}
+
+// A positive finite number, checked by CLI11 before it converts the flag's value.
+const CLI::Validator kPositive(
+    [](std::string& text) {
+      double v;
+      return parseFinite(text, v) && v > 0 ? std::string() : "'" + text + "' is not a positive finite number";
+    },
+    "POSITIVE");
+
+template <class Enum>
+using Names = std::vector<std::pair<std::string, Enum>>;
+const Names<hsr::Cull> kCullNames{{"none", hsr::Cull::None}, {"back", hsr::Cull::Back}, {"front", hsr::Cull::Front}};
+const Names<hsr::Shading> kShadingNames{
+    {"lambert", hsr::Shading::Lambert}, {"flat", hsr::Shading::Flat}, {"faceid", hsr::Shading::FaceId}};
+
+// The names, for CLI11 to check a flag's value against (in any letter case).
+template <class Enum>
+CLI::IsMember oneOf(const Names<Enum>& names) {
+  std::vector<std::string> keys;
+  for (const auto& entry : names) keys.push_back(entry.first);
+  return CLI::IsMember(keys, CLI::ignore_case);
+}
+template <class Enum>
+std::string nameOf(const Names<Enum>& names, Enum value) {
+  for (const auto& [key, v] : names)
+    if (v == value) return key;
+  throw std::logic_error("nameOf: unnamed value");
+}
+// The value of a name oneOf() accepted (in any letter case).
+template <class Enum>
+Enum valueOf(const Names<Enum>& names, std::string name) {
+  for (char& c : name) c = char(std::tolower(static_cast<unsigned char>(c)));
+  for (const auto& [key, value] : names)
+    if (key == name) return value;
+  throw std::logic_error("valueOf: '" + name + "' was not checked");
+}
+
+}  // namespace
+
+hsr::dvec3 parseVec3(const std::string& flag, const std::string& text) {
+  std::vector<double> v = parseNumbers(flag, text, 3, 3, "x,y,z");
+  return {v[0], v[1], v[2]};
+}
+
+std::string cullName(hsr::Cull cull) { return nameOf(kCullNames, cull); }
+
+void ViewFlags::declare(CLI::App& cmd) {
+  cmd.add_option("scene", scene, "Mesh file (OBJ, PLY, STL, OFF, glTF/GLB, ...), scene JSON or builtin:NAME[?k=v&...]")
+      ->type_name("SCENE")
+      ->required();
+  cmd.add_option("--camera", cameraFile, "Camera JSON (OpenGL or OpenCV style); the flags below override it")
+      ->type_name("CAM.json");
+  sizeFlag = cmd.add_option("--size", size, "Image size (default: the camera JSON's width and height, else 1280x720)")->type_name("WxH")->capture_default_str();
+
+  cmd.add_option("--algorithm", options.algorithm, "Visibility algorithm: " + algorithmNames())
+      ->type_name("NAME")
+      ->capture_default_str();
+  cmd.add_option("--depth-format", depthFormat,
+                 "Depth buffer STORAGE[:MAPPING]: storage u16|u24|u32|f32, mapping z|reversed|inv|linear "
+                 "(default f32:reversed)")
+      ->type_name("FMT");
+  cmd.add_option("--threads", options.threads, "Worker threads (0 = all cores)")
+      ->type_name("N")
+      ->check(CLI::Range(0, 4096))
+      ->capture_default_str();
+  cmd.add_option("--param", params,
+                 "An algorithm parameter, repeatable (e.g. --param raster=halfspace); 'hsr algorithms' lists "
+                 "each algorithm's parameters, values and defaults")
+      ->type_name("KEY=VALUE")
+      ->take_all();
+  CLI::Option* depthOnlyFlag = cmd.add_flag(
+      "--depth-only", depthOnly,
+      "z-buffer keeps only depth: no face ids or colour; depth is the stored value mapped back to eye depth");
+  outputsFlag = cmd.add_option("--outputs", outputs,
+                 "Buffers the z-buffer resolves, comma-separated: depth (always), face, triangle, color (default: "
+                 "all; depth alone = --depth-only). Buffers not asked for are not written")
+      ->type_name("LIST")
+      ->excludes(depthOnlyFlag);
+  cmd.add_option("--cull", cull, "Face culling (faces are two-sided by default)")
+      ->check(oneOf(kCullNames))
+      ->capture_default_str();
+  cmd.add_option("--shading", shading, "Colour of the image")->check(oneOf(kShadingNames))->capture_default_str();
+  cmd.add_option("--background", background, "Background colour, 0-255 (default 0,0,0)")->type_name("R,G,B[,A]");
+
+  const char* group = "Camera (override or extend --camera; default: the scene's camera or a framing of it)";
+  cmd.add_option("--eye", eye, "Camera position")->type_name("X,Y,Z")->group(group);
+  cmd.add_option("--target", target, "Point looked at")->type_name("X,Y,Z")->group(group);
+  cmd.add_option("--up", up, "Up direction")->type_name("X,Y,Z")->group(group);
+  fovFlag = cmd.add_option("--fov", fov, "Vertical field of view, degrees")->type_name("DEG")->check(kPositive)->group(group);
+  nearFlag = cmd.add_option("--near", near, "Near clipping plane (eye depth)")->type_name("N")->check(kPositive)->group(group);
+  farFlag = cmd.add_option("--far", far, "Far clipping plane (eye depth)")->type_name("F")->check(kPositive)->group(group);
+  orthoFlag = cmd.add_option("--ortho", ortho, "Orthographic, view volume HEIGHT world units tall")
+                  ->type_name("HEIGHT")
+                  ->check(kPositive)
+                  ->group(group);
+}
+
+hsr::FrameOutputs ViewFlags::frameOutputs() const {
+  if (depthOnly) return hsr::FrameOutputs::DepthOnly;
+  return outputsFlag->count() ? hsr::parseFrameOutputs(outputs, "--outputs") : hsr::FrameOutputs::All;
+}
+
+std::map<std::string, std::string> ViewFlags::parsedParams() const {
+  std::map<std::string, std::string> out;
+  for (const std::string& p : params) {
+    const size_t eq = p.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw InputError(fmt::format("--param '{}': expected KEY=VALUE (see 'hsr algorithms')", p));
+    if (!out.emplace(p.substr(0, eq), p.substr(eq + 1)).second)
+      throw InputError(fmt::format("--param '{}': {} is given twice", p, p.substr(0, eq)));
+  }
+  return out;
+}
+
+bool ViewFlags::openGlFlagsGiven() const {
+  return !eye.empty() || !target.empty() || !up.empty() || fovFlag->count() || orthoFlag->count();
+}
+
+Job ViewFlags::prepare() const {
+  Job job;
+  job.sceneName = scene;
+  ImageSize imageSize = parseSize(size);
+  job.options = options;
+  job.options.params = parsedParams();
+  job.options.outputs = frameOutputs();
+  job.options.cull = valueOf(kCullNames, cull);
+  job.options.shading = valueOf(kShadingNames, shading);
+  if (!depthFormat.empty()) job.options.depthFormat = hsr::DepthFormat::parse(depthFormat);
+  if (!background.empty()) job.options.background = parseColor(background);
+  const hsr::AlgorithmInfo* algorithm = hsr::findAlgorithm(options.algorithm);
+  if (!algorithm)
+    throw InputError(fmt::format("--algorithm '{}': unknown (known: {})", options.algorithm, algorithmNames()));
+  hsr::resolveParams(*algorithm, job.options.params);  // a parameter typo fails before the scene loads
+  std::optional<hsr::CameraSpec> fileCamera;
+  if (!cameraFile.empty()) fileCamera = hsr::parseCameraJson(readTextFile(cameraFile), cameraFile);
+  std::optional<hsr::dvec3> eyeValue, targetValue, upValue;
+  if (!eye.empty()) eyeValue = parseVec3("--eye", eye);
+  if (!target.empty()) targetValue = parseVec3("--target", target);
+  if (!up.empty()) upValue = parseVec3("--up", up);
+
+  job.scene = hsr::loadScene(scene);
+  const hsr::Bounds3 bounds = job.scene.bounds();
+  hsr::CameraSpec spec = fileCamera         ? *fileCamera
+                         : job.scene.camera ? *job.scene.camera
+                         : fovFlag->count() ? hsr::frameBounds(bounds, fov)
+                                            : hsr::frameBounds(bounds);
+  // The name camera errors carry: where the camera came from.
+  bool flagsGiven = openGlFlagsGiven() || nearFlag->count() || farFlag->count();
+  std::string cameraName = !cameraFile.empty() ? cameraFile : flagsGiven ? "command line" : scene;
+  if (!cameraFile.empty() && flagsGiven) cameraName += " (with camera flags)";
+  if (openGlFlagsGiven() && spec.kind != hsr::CameraSpec::Kind::OpenGL)
+    throw InputError(cameraName + ": --eye/--target/--up/--fov/--ortho apply to OpenGL-style cameras, not this OpenCV one");
+  // A scene's clipping planes suit its own viewpoint: when the flags move the camera, let
+  // resolveCamera fit them to the scene again (a camera file's planes are the user's choice).
+  if (!fileCamera && (eyeValue || targetValue || orthoFlag->count())) {
+    spec.near.reset();
+    spec.far.reset();
+  }
+  if (eyeValue) spec.eye = *eyeValue;
+  if (targetValue) spec.target = *targetValue;
+  if (upValue) spec.up = *upValue;
+  if (fovFlag->count()) spec.fovyDeg = fov;
+  if (orthoFlag->count()) spec.orthoHeight = ortho;
+  if (nearFlag->count()) spec.near = near;
+  if (farFlag->count()) spec.far = far;
+  if (!sizeFlag->count() && spec.width && spec.height) imageSize = {*spec.width, *spec.height};
+  warnPrincipalPointOutside(spec, imageSize, cameraName);
+  job.camera = hsr::resolveCamera(spec, imageSize.width, imageSize.height, bounds, cameraName);
+  return job;
+}
+
+}  // namespace hsr::cli

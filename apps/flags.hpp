@@ -1,0 +1,53 @@
+// The flags `hsr render` and `hsr bench` share: the scene, the image size, the camera and the
+// algorithm settings, declared on a subcommand, checked, then turned into a loaded scene and a
+// resolved camera (a Job). Used by apps/render_cmd.cpp and apps/bench_cmd.cpp.
+#pragma once
+#include <hsr/hsr.hpp>
+
+#include <CLI/CLI.hpp>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace hsr::cli {
+
+/// What render and bench share: the scene, the image size, the camera and the algorithm settings.
+struct Job {
+  std::string sceneName;
+  hsr::Scene scene;
+  hsr::Camera camera;
+  hsr::RenderOptions options;
+};
+
+/// "x,y,z" as a vector; throws InputError "FLAG 'TEXT': expected x,y,z (finite numbers)".
+hsr::dvec3 parseVec3(const std::string& flag, const std::string& text);
+/// The name --cull takes for `cull`.
+std::string cullName(hsr::Cull cull);
+
+/// The view flags of one subcommand, bound to its CLI11 app by declare().
+struct ViewFlags {
+  std::string scene, cameraFile, size = "1280x720", depthFormat, background;
+  std::string cull = "none", shading = "lambert";
+  std::vector<std::string> params;  // --param KEY=VALUE, repeatable
+  bool depthOnly = false;
+  std::string outputs;  // --outputs (not given: all)
+  std::string eye, target, up;
+  double fov = 0, near = 0, far = 0, ortho = 0;
+  CLI::Option *fovFlag = nullptr, *nearFlag = nullptr, *farFlag = nullptr, *orthoFlag = nullptr;
+  CLI::Option* outputsFlag = nullptr;
+  CLI::Option* sizeFlag = nullptr;
+  hsr::RenderOptions options;  // algorithm and threads: set by CLI11 directly
+
+  void declare(CLI::App& cmd);
+  /// What the z-buffer resolves (checked before the scene is loaded).
+  hsr::FrameOutputs frameOutputs() const;
+  /// --param KEY=VALUE flags as a map (a key given twice is an error).
+  std::map<std::string, std::string> parsedParams() const;
+  bool openGlFlagsGiven() const;
+  /// Checks every flag, then loads the scene and resolves the camera: bad flags fail before a
+  /// possibly long scene load.
+  Job prepare() const;
+};
+
+}  // namespace hsr::cli

@@ -1,0 +1,288 @@
+// `hsr render`: one frame of a scene, written to colour, face-id, depth and attribute files (all or
+// none), with statistics as a summary or JSON; optionally shadowed and verified against the exact
+// reference. Set up by the subcommand table in apps/main.cpp (docs/cli.md "hsr render").
+#include <hsr/hsr.hpp>
+#include <hsr/threads.hpp>
+
+#include <fmt/core.h>
+#include <fmt/ranges.h>
+
+#include <chrono>
+#include <memory>
+#include <optional>
+
+#include "commands.hpp"
+#include "flags.hpp"
+#include "output_set.hpp"
+
+namespace hsr::cli {
+namespace {
+
+struct RenderFlags {
+  ViewFlags view;
+  std::string out, ids, depth, depthImage, overdrawImage, stats, svg;
+  std::string instanceIds, barycentric;  // attributes resolved from the ids (hsr/views.hpp)
+  bool verify = false, quiet = false, json = false;
+  std::vector<hsr::cli::OutputFlag> outputFlags;  // every output flag, checked as a set
+  // --shadows (docs/shadows.md): the light from the flags, else the scene's, else the default.
+  bool shadows = false;
+  std::string lightDir, lightPos;
+  hsr::ShadowOptions shadowOptions;
+};
+
+// The light --light-dir or --light-pos give (checked before the scene loads), if any.
+std::optional<hsr::Light> flagLight(const RenderFlags& f) {
+  if (f.lightDir.empty() && f.lightPos.empty()) return std::nullopt;
+  hsr::Light light;
+  light.kind = f.lightDir.empty() ? hsr::Light::Kind::Point : hsr::Light::Kind::Directional;
+  const char* flag = f.lightDir.empty() ? "--light-pos" : "--light-dir";
+  light.vector = parseVec3(flag, f.lightDir.empty() ? f.lightPos : f.lightDir);
+  hsr::checkLight(light, fmt::format("{} '{}'", flag, f.lightDir.empty() ? f.lightPos : f.lightDir));
+  return light;
+}
+
+void printShadowSummary(const hsr::Stats& s) {
+  auto count = [&s](std::string_view key) { return s.detailCount(key).value_or(0); };
+  fmt::print("  shadows: {}, map {}x{}, lit {} pixels, shadowed {} (of which facing away {})\n",
+             s.detailText("shadow_light"), count("shadow_map_size"), count("shadow_map_size"),
+             count("shadow_lit_pixels"), count("shadow_shadowed_pixels"), count("shadow_facing_away_pixels"));
+  if (s.detailCount("shadow_wrong_pixels"))
+    fmt::print("  shadow verify: {} wrong pixels against shadow rays, {} away from shadow edges, {} away from "
+               "shadow and face edges, {} unexplained (away from edges at the map's scale too)\n",
+               count("shadow_wrong_pixels"), count("shadow_wrong_away_from_shadow_edges"),
+               count("shadow_wrong_away_from_edges"), count("shadow_wrong_unexplained"));
+}
+
+// The human summary of one rendered frame.
+void printSummary(const Job& job, const hsr::Stats& s, double wallMs, const std::vector<std::string>& written) {
+  double pixels = double(s.width) * double(s.height);
+  std::string params;
+  for (const auto& [key, value] : s.params) params += fmt::format(" {}={}", key, value);
+  fmt::print("{}{} on {}: {}x{}{}, {} threads, cull {}\n", s.algorithm, params, job.sceneName, s.width, s.height,
+             s.depth_format.empty() ? "" : ", depth " + s.depth_format, hsr::resolveThreads(job.options.threads),
+             cullName(job.options.cull));
+  fmt::print("  faces {}, triangles {} (clipped {}, zero area on the pixel grid {}; culled back-face {}, frustum {}, "
+             "occlusion {})\n",
+             s.faces, s.triangles, s.triangles_clipped, s.triangles_degenerate, s.culled_backface, s.culled_frustum,
+             s.culled_occlusion);
+  fmt::print("  covered {} pixels ({:.1f}%), overdraw {:.2f}, depth tests {}, writes {}, memory {:.1f} MB\n",
+             s.covered_pixels, pixels > 0 ? 100.0 * double(s.covered_pixels) / pixels : 0.0, s.overdraw(),
+             s.depth_tests, s.depth_writes, double(s.memory_bytes) / 1e6);
+  std::string stages;
+  for (const auto& [stage, ms] : s.time_ms) stages += fmt::format("{}{} {:.2f}", stages.empty() ? "" : ", ", stage, ms);
+  fmt::print("  time {:.2f} ms wall{}\n", wallMs, stages.empty() ? "" : " (" + stages + ")");
+  if (s.wrong_pixels)
+    fmt::print("  verify: {} wrong pixels, {} ambiguous\n", *s.wrong_pixels, s.ambiguous_pixels.value_or(0));
+  if (!written.empty()) fmt::print("  wrote {}\n", fmt::join(written, ", "));
+}
+
+// --instance-ids and --barycentric: their file names, and the ids they are resolved from.
+void checkAttributeOutputs(const RenderFlags& f, hsr::FrameOutputs kept) {
+  if (!f.instanceIds.empty()) {
+    hsr::checkInstanceIdsPath(f.instanceIds);
+    if (!has(kept, hsr::FrameOutputs::FaceIds))
+      throw InputError("--instance-ids: the outputs kept (" + hsr::frameOutputsName(kept) + ") have no face ids (add face)");
+  }
+  if (!f.barycentric.empty()) {
+    hsr::checkBarycentricsPath(f.barycentric);
+    if (!has(kept, hsr::FrameOutputs::TriangleIds))
+      throw InputError("--barycentric: the outputs kept (" + hsr::frameOutputsName(kept) +
+                       ") have no triangle ids (add triangle)");
+  }
+}
+
+void writeAttributeOutputs(const RenderFlags& f, const Job& job, const hsr::Frame& frame,
+                           std::vector<std::string>& written) {
+  if (!f.instanceIds.empty()) {
+    hsr::writeInstanceIds(frame, hsr::faceMeshIndices(job.scene), f.instanceIds);
+    written.push_back(f.instanceIds);
+  }
+  if (!f.barycentric.empty()) {
+    hsr::writeBarycentrics(job.scene, job.camera, frame, f.barycentric);
+    written.push_back(f.barycentric);
+  }
+}
+
+int runRender(const RenderFlags& f) {
+  struct Output {
+    const std::string& path;  // empty: not requested
+    hsr::OutputKind kind;
+    void (*write)(const hsr::Frame&, const std::string&);
+  };
+  const Output outputs[] = {{f.out, hsr::OutputKind::Color, hsr::writeColorPng},
+                            {f.ids, hsr::OutputKind::FaceIds, hsr::writeFaceIds},
+                            {f.depth, hsr::OutputKind::Depth, hsr::writeDepth},
+                            {f.depthImage, hsr::OutputKind::DepthImage, hsr::writeDepthImage},
+                            {f.overdrawImage, hsr::OutputKind::OverdrawImage, hsr::writeOverdrawImage}};
+  // Reject output names no writer knows, or that name no file, a special file or another
+  // output's file, before any work is done.
+  hsr::cli::checkOutputSet(f.outputFlags);
+  for (const Output& o : outputs)
+    if (!o.path.empty()) hsr::checkOutputPath(o.kind, o.path);
+  if (f.view.depthOnly && (!f.out.empty() || !f.ids.empty()))
+    throw InputError("--depth-only keeps no colour or face ids: drop --out/--ids or --depth-only");
+  if (f.view.depthOnly && f.verify) throw InputError("--verify compares face ids, which --depth-only does not keep");
+  const hsr::FrameOutputs kept = f.view.frameOutputs();
+  if (!f.out.empty() && !has(kept, hsr::FrameOutputs::Color))
+    throw InputError("--out: --outputs " + f.view.outputs + " keeps no colour (add color)");
+  if (!f.ids.empty() && !has(kept, hsr::FrameOutputs::FaceIds))
+    throw InputError("--ids: --outputs " + f.view.outputs + " keeps no face ids (add face)");
+  if (f.verify && !has(kept, hsr::FrameOutputs::IdsAndDepth))
+    throw InputError("--verify compares face and triangle ids: --outputs " + f.view.outputs + " lacks face or triangle");
+  checkAttributeOutputs(f, kept);
+  if (f.shadows && !has(kept, hsr::FrameOutputs::TriangleIds))
+    throw InputError("--shadows finds each pixel's point on its triangle: the outputs kept (" +
+                     hsr::frameOutputsName(kept) + ") have no triangle ids (add triangle)");
+  const std::optional<hsr::Light> lightFromFlags = flagLight(f);
+  if (f.shadows) hsr::checkShadowOptions(f.shadowOptions);
+
+  if (!f.svg.empty()) hsr::checkSvgPath(f.svg);
+
+  Job job = f.view.prepare();
+  if (!f.svg.empty() && !hsr::paintsPolygons(job.options.algorithm))
+    throw InputError("--svg: " + job.options.algorithm +
+                     " paints no polygons (vector output needs --algorithm painter, newell or bsp)");
+  job.options.verify = f.verify;
+  job.options.countWrites = !f.overdrawImage.empty();
+  auto start = std::chrono::steady_clock::now();
+  hsr::Frame frame = hsr::render(job.scene, job.camera, job.options);
+  if (f.shadows) {
+    hsr::ShadowOptions shadowOptions = f.shadowOptions;
+    shadowOptions.depthFormat = job.options.depthFormat;
+    shadowOptions.threads = job.options.threads;
+    const hsr::Light light = lightFromFlags ? *lightFromFlags
+                             : job.scene.light ? *job.scene.light
+                                               : hsr::defaultLight(job.camera);
+    hsr::addShadows(job.scene, job.camera, frame, light, shadowOptions, f.verify);
+  }
+  double wallMs = millisecondsSince(start);
+
+  // All outputs or none: each is written to a temporary file, and all are renamed at the end.
+  std::vector<std::string> written;
+  std::string statsJson;
+  {
+    hsr::OutputBatch batch;
+    if (!f.svg.empty()) {  // the same order again, as polygons (timed apart from the frame)
+      const auto svgStart = std::chrono::steady_clock::now();
+      hsr::writeSvg(job.scene, job.camera, job.options, f.svg);
+      frame.stats.addTime("svg", millisecondsSince(svgStart));
+      written.push_back(f.svg);
+    }
+    statsJson = frame.stats.toJson();
+    for (const Output& o : outputs) {
+      if (o.path.empty()) continue;
+      o.write(frame, o.path);
+      written.push_back(o.path);
+    }
+    writeAttributeOutputs(f, job, frame, written);
+    if (!f.stats.empty() && f.stats != "-") {
+      hsr::writeTextFile(statsJson + "\n", f.stats);
+      written.push_back(f.stats);
+    }
+    batch.commit();
+  }
+
+  if (f.json || f.stats == "-")  // --stats -: the statistics JSON on standard output
+    fmt::print("{}\n", statsJson);
+  else if (!f.quiet) {
+    printSummary(job, frame.stats, wallMs, written);
+    if (f.shadows) printShadowSummary(frame.stats);
+  }
+  return 0;
+}
+
+}  // namespace
+
+Runner setupRender(CLI::App& cmd) {
+  auto f = std::make_shared<RenderFlags>();
+  f->view.declare(cmd);
+  const char* outputs = "Outputs (written atomically, only after a successful render)";
+  cmd.add_option("-o,--out", f->out, "Colour image")->type_name("COLOR.png")->group(outputs);
+  cmd.add_option("--ids", f->ids, "Face ids: PNG (24-bit id+1, 0 = background) or .npy (int32, -1)")
+      ->type_name("IDS.png|.npy")
+      ->group(outputs);
+  cmd.add_option("--depth", f->depth, "Eye depth, float32, +inf background")
+      ->type_name("DEPTH.npy|.pfm|.exr|.f32")
+      ->group(outputs);
+  cmd.add_option("--depth-image", f->depthImage, "Depth as a grey picture, near white, background black")
+      ->type_name("DEPTH.png")
+      ->group(outputs);
+  cmd.add_option("--overdraw-image", f->overdrawImage,
+                 "Fragments written per pixel, on a fixed colour scale: black 0, blue 1, green 2, yellow 3, orange "
+                 "4, red 5, magenta 6, white 7 or more")
+      ->type_name("OVERDRAW.png")
+      ->group(outputs);
+  cmd.add_option("--instance-ids", f->instanceIds,
+                 "Instance ids: per pixel the mesh its face belongs to (its position among the scene's meshes, as "
+                 "'hsr info' lists them); PNG (24-bit id+1, 0 = background) or .npy (int32, -1)")
+      ->type_name("INST.png|.npy")
+      ->group(outputs);
+  cmd.add_option("--barycentric", f->barycentric,
+                 "Barycentric coordinates of each pixel centre on the visible triangle, float32 (H, W, 3), 0 on the "
+                 "background; for a triangle face, of its vertices in file order (--ids names the face)")
+      ->type_name("BARY.npy")
+      ->group(outputs);
+  cmd.add_option("--stats", f->stats, "Statistics JSON ('-': standard output, as --json)")->type_name("STATS.json")->group(outputs);
+  cmd.add_option("--svg", f->svg,
+                 "Vector image: the painting order of painter, newell or bsp as SVG polygons, back to front "
+                 "(docs/vector-output.md)")
+      ->type_name("IMAGE.svg")
+      ->group(outputs);
+  const std::pair<const char*, std::string*> outputFlags[] = {
+      {"--out", &f->out},           {"--ids", &f->ids},
+      {"--depth", &f->depth},       {"--depth-image", &f->depthImage},
+      {"--overdraw-image", &f->overdrawImage}, {"--instance-ids", &f->instanceIds},
+      {"--barycentric", &f->barycentric},      {"--stats", &f->stats},
+      {"--svg", &f->svg}};
+  for (auto [flag, path] : outputFlags)
+    f->outputFlags.push_back({flag, cmd.get_option(flag), path, std::string_view(flag) == "--stats"});
+  cmd.add_flag("--verify", f->verify, "Also render the exact reference and count wrong/ambiguous pixels");
+  const char* shadows = "Shadows (docs/shadows.md)";
+  CLI::Option* shadowsFlag =
+      cmd.add_flag("--shadows", f->shadows,
+                   "Shadow-map the image: a depth map rendered by the z-buffer from the light, each visible pixel "
+                   "tested against it, shadowed pixels darkened in the colour output (with --verify, also checked "
+                   "against shadow rays)")
+          ->group(shadows);
+  CLI::Option* lightDirFlag =
+      cmd.add_option("--light-dir", f->lightDir,
+                     "A directional light: the direction its light travels (overrides the scene's light; default: "
+                     "the scene's, else a sun over the viewer's left shoulder)")
+          ->type_name("X,Y,Z")
+          ->needs(shadowsFlag)
+          ->group(shadows);
+  cmd.add_option("--light-pos", f->lightPos, "A point light at this position, outside the scene's bounds")
+      ->type_name("X,Y,Z")
+      ->needs(shadowsFlag)
+      ->excludes(lightDirFlag)
+      ->group(shadows);
+  cmd.add_option("--shadow-map-size", f->shadowOptions.mapSize,
+                 fmt::format("Shadow map side in texels, {} to {}", hsr::kMinShadowMapSize, hsr::kMaxShadowMapSize))
+      ->type_name("N")
+      ->needs(shadowsFlag)
+      ->capture_default_str()
+      ->group(shadows);
+  cmd.add_option("--shadow-bias", f->shadowOptions.bias,
+                 "Depth bias in texel widths at the receiver (besides the depth format's rounding): an occluder "
+                 "nearer the light than the receiver's plane by less than this casts no shadow")
+      ->type_name("TEXELS")
+      ->needs(shadowsFlag)
+      ->capture_default_str()
+      ->group(shadows);
+  cmd.add_flag("--json", f->json, "Print the statistics JSON to stdout instead of the summary");
+  cmd.add_flag("-q,--quiet", f->quiet, "Print nothing on success");
+
+  std::string footer = "Algorithms ('hsr algorithms' lists their parameters and guarantees):\n";
+  for (const hsr::AlgorithmInfo& a : hsr::algorithms()) footer += fmt::format("  {:<12} {}\n", a.name, a.summary);
+  footer +=
+      "\nExamples:\n"
+      "  hsr render builtin:painter-cycle --algorithm zbuffer --param raster=halfspace --overdraw-image o.png\n"
+      "  hsr render builtin:cubes -o cubes.png\n"
+      "  hsr render model.obj --camera cam.json --size 1920x1080 --ids ids.png --depth depth.npy --verify\n"
+      "  hsr render scene.json --eye 4,3,5 --target 0,0,0 --depth-format u16:z --depth-image z.png\n"
+      "  hsr render builtin:city --shadows --light-dir 1,-2,0.5 --shadow-map-size 4096 -o city.png --verify";
+  cmd.footer(footer);
+  return [f] { return runRender(*f); };
+}
+
+}  // namespace hsr::cli
