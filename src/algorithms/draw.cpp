@@ -94,11 +94,7 @@ class FragmentWriter {
 
   // Every fragment of triangle i inside pixels [x0, x1] x [y0, y1], through the rule.
   void draw(uint32_t i, DrawRaster raster, int x0, int y0, int x1, int y1, DrawCounters& counters) {
-    SetupTriangle t = tris_[i];
-    t.minX = int16_t(std::max<int>(t.minX, x0));
-    t.minY = int16_t(std::max<int>(t.minY, y0));
-    t.maxX = int16_t(std::min<int>(t.maxX, x1));
-    t.maxY = int16_t(std::min<int>(t.maxY, y1));
+    const SetupTriangle t = clippedTo(tris_[i], x0, y0, x1, y1);
     if (t.minX > t.maxX || t.minY > t.maxY) return;
     const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, cam_.near, cam_.far, cam_.orthographic);
     DrawCounters n;  // counted in registers, added once per triangle
@@ -119,8 +115,6 @@ class FragmentWriter {
   // Face ids, exact eye depths and colours of rows [y0, y1) from the last fragment written to
   // each pixel; depth only under the depth test: the eye depth of the stored value.
   void resolveRows(int y0, int y1, DrawCounters& n) {
-    const bool faceIds = has(opt_.outputs, FrameOutputs::FaceIds);
-    const bool triangleIds = has(opt_.outputs, FrameOutputs::TriangleIds);
     for (int y = y0; y < y1; ++y)
       for (int x = 0; x < cam_.width; ++x) {
         const size_t idx = frame_.index(x, y);
@@ -131,10 +125,7 @@ class FragmentWriter {
           frame_.depth[idx] = float(eyeDepthOfStored<S, M>(double(depth_[idx]), cam_.near, cam_.far, cam_.orthographic));
         } else {
           if (!winner_[idx]) continue;
-          const SetupTriangle& t = tris_[winner_[idx] - 1];
-          if (faceIds) frame_.faceId[idx] = int32_t(derived_ ? derived_->face[t.face] : t.face);
-          if (triangleIds) frame_.triangleId[idx] = int32_t(derived_ ? derived_->triangle[t.triangle] : t.triangle);
-          frame_.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
+          resolveWinner(tris_[winner_[idx] - 1], x, y, idx, opt_.outputs, derived_, frame_);
           // (Blend composited its colours as it drew; the others show the last written.)
           if (color_ && R != WriteRule::Blend && R != WriteRule::DepthTestBlend && R != WriteRule::BlendUnder)
             frame_.color[idx] = colors_[winner_[idx] - 1];
@@ -211,17 +202,6 @@ class FragmentWriter {
   std::vector<UnderSum> sums_;    // BlendUnder: each pixel's blend so far
 };
 
-// Per tile of kBinTile pixels, the triangles whose box meets it, in drawing order.
-std::vector<std::vector<uint32_t>> binTriangles(std::span<const SetupTriangle> tris, int tilesX, int tilesY) {
-  std::vector<std::vector<uint32_t>> bins(size_t(tilesX) * size_t(tilesY));
-  for (uint32_t i = 0; i < tris.size(); ++i) {
-    const SetupTriangle& t = tris[i];
-    for (int ty = t.minY / kBinTile; ty <= t.maxY / kBinTile; ++ty)
-      for (int tx = t.minX / kBinTile; tx <= t.maxX / kBinTile; ++tx) bins[size_t(ty) * size_t(tilesX) + size_t(tx)].push_back(i);
-  }
-  return bins;
-}
-
 // The frame drawn and resolved by one writer: on one thread over the whole image, or binned,
 // tile by tile on the pool (each tile's pixels are its own; counters summed in tile order).
 template <WriteRule R, DepthStorage S, DepthMapping M>
@@ -249,7 +229,7 @@ void drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const Came
     return;
   }
   const int tilesX = (cam.width + kBinTile - 1) / kBinTile, tilesY = (cam.height + kBinTile - 1) / kBinTile;
-  const std::vector<std::vector<uint32_t>> bins = binTriangles(tris, tilesX, tilesY);
+  const std::vector<std::vector<uint32_t>> bins = binByCell(tris, kBinTile, kBinTile, tilesX, tilesY);
   std::vector<DrawCounters> perTile(bins.size());
   parallelFor(0, bins.size(), threads, [&](size_t tile) {
     const int x0 = int(tile % size_t(tilesX)) * kBinTile, y0 = int(tile / size_t(tilesX)) * kBinTile;
@@ -268,13 +248,63 @@ void drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const Came
   parallelFor(0, size_t(cam.height), threads, [&](size_t y) { writer.resolveRows(int(y), int(y) + 1, perRow[y]); });
   for (const DrawCounters& c : perTile) counters.add(c);
   for (const DrawCounters& c : perRow) counters.add(c);
-  uint64_t binBytes = bins.capacity() * sizeof(bins[0]);
-  for (const auto& b : bins) binBytes += b.capacity() * sizeof(uint32_t);
   writer.addMemory(frame.stats);
-  frame.stats.addMemory("bins", binBytes);
+  frame.stats.addMemory("bins", binBytes(bins));
 }
 
 }  // namespace
+
+SetupTriangle clippedTo(const SetupTriangle& t, int x0, int y0, int x1, int y1) {
+  SetupTriangle c = t;
+  c.minX = int16_t(std::max<int>(t.minX, x0));
+  c.minY = int16_t(std::max<int>(t.minY, y0));
+  c.maxX = int16_t(std::min<int>(t.maxX, x1));
+  c.maxY = int16_t(std::min<int>(t.maxY, y1));
+  return c;
+}
+
+std::vector<std::vector<uint32_t>> binByCell(std::span<const SetupTriangle> triangles, int cellWidth, int cellHeight,
+                                             int columns, int rows) {
+  std::vector<std::vector<uint32_t>> bins(size_t(columns) * size_t(rows));
+  for (uint32_t i = 0; i < triangles.size(); ++i) {
+    const SetupTriangle& t = triangles[i];
+    if (t.minX > t.maxX || t.minY > t.maxY) continue;
+    for (int cy = t.minY / cellHeight; cy <= t.maxY / cellHeight; ++cy)
+      for (int cx = t.minX / cellWidth; cx <= t.maxX / cellWidth; ++cx)
+        bins[size_t(cy) * size_t(columns) + size_t(cx)].push_back(i);
+  }
+  return bins;
+}
+
+uint64_t binBytes(const std::vector<std::vector<uint32_t>>& bins) {
+  uint64_t bytes = bins.capacity() * sizeof(bins[0]);
+  for (const auto& b : bins) bytes += b.capacity() * sizeof(uint32_t);
+  return bytes;
+}
+
+std::vector<SetupTriangle> frontEndStep(const Scene& scene, const Camera& camera, const RenderOptions& options,
+                                        FrontEndOutput& fe, Timer& timer, Stats& st) {
+  runFrontEnd(scene, camera, options, fe);
+  std::vector<SetupTriangle> triangles = fe.flatten();
+  st.addTime("frontend", timer.lap());
+  return triangles;
+}
+
+void recordDrawStats(Stats& st, const FrontEndCounters& fe, uint64_t frontEndBytes, size_t setupTriangles,
+                     const DrawCounters& n, const DepthFormat* depthFormat, const Frame& frame) {
+  if (depthFormat) st.depth_format = depthFormat->name();
+  st.triangles_clipped = fe.clipped;
+  st.triangles_degenerate = fe.degenerate;
+  st.culled_backface = fe.culledBackface;
+  st.culled_frustum = fe.culledFrustum;
+  st.depth_tests = n.depthTests;
+  st.depth_writes = n.depthWrites;
+  st.color_writes = n.colorWrites;
+  st.covered_pixels = n.covered;
+  st.addMemory("setup_triangles", setupTriangles * sizeof(SetupTriangle));
+  st.addMemory("front_end", frontEndBytes);
+  addFrameMemory(st, frame);
+}
 
 const char* writeRuleName(WriteRule rule) {
   switch (rule) {
@@ -338,9 +368,7 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
   Stats& st = frame.stats;
   const TriangleShader shade(scene, camera, options.shading);  // (the original scene's faces)
   FrontEndOutput fe;
-  runFrontEnd(derived ? *derived->scene : scene, camera, options, fe);
-  std::vector<SetupTriangle> triangles = fe.flatten();
-  st.addTime("frontend", timer.lap());
+  std::vector<SetupTriangle> triangles = frontEndStep(derived ? *derived->scene : scene, camera, options, fe, timer, st);
   if (order) {
     order(triangles);
     st.addTime("order", timer.lap());
@@ -349,18 +377,9 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
   drawOrdered(triangles, rule, raster, camera, options, shade, buffers, frame, n, derived);
   st.addTime("raster", timer.lap());
 
-  if (rule == WriteRule::DepthTest || rule == WriteRule::DepthTestBlend) st.depth_format = options.depthFormat.name();
-  st.triangles_clipped = fe.clipped;
-  st.triangles_degenerate = fe.degenerate;
-  st.culled_backface = fe.culledBackface;
-  st.culled_frustum = fe.culledFrustum;
-  st.depth_tests = n.depthTests;
-  st.depth_writes = n.depthWrites;
-  st.color_writes = n.colorWrites;
-  st.covered_pixels = n.covered;
-  st.addMemory("setup_triangles", triangles.capacity() * sizeof(SetupTriangle));
-  st.addMemory("front_end", fe.memoryBytes());
-  addFrameMemory(st, frame);
+  const bool depthTested = rule == WriteRule::DepthTest || rule == WriteRule::DepthTestBlend;
+  recordDrawStats(st, fe, fe.memoryBytes(), triangles.capacity(), n, depthTested ? &options.depthFormat : nullptr,
+                  frame);
   st.setDetail("rasterizer", drawRasterName(raster));
   st.setDetail("write_rule", writeRuleName(rule));
   if (rule == WriteRule::WhereUnwritten || rule == WriteRule::BlendUnder) st.setDetail("skipped_full", n.skippedFull);

@@ -13,6 +13,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "core/timer.hpp"
 #include "frontend/frontend.hpp"
 
 namespace hsr::algo {
@@ -93,6 +94,41 @@ struct DerivedScene {
   std::vector<uint32_t> face;            // per face of `scene`: the original face
   std::vector<uint32_t> triangle;        // per triangle of `scene`: a triangle of the original face
 };
+
+// ---- The z-buffer core: the pieces every way of drawing shares (draw.cpp) ----
+
+/// A copy of t that covers only the pixels of [x0, x1] x [y0, y1] (an empty box when none).
+SetupTriangle clippedTo(const SetupTriangle& t, int x0, int y0, int x1, int y1);
+
+/// Per cell of a grid of `columns` x `rows` cells of cellWidth x cellHeight pixels (row by row),
+/// the indices of the triangles whose box meets it, in drawing order; a triangle whose box holds
+/// no pixel is in no cell.
+std::vector<std::vector<uint32_t>> binByCell(std::span<const SetupTriangle> triangles, int cellWidth, int cellHeight,
+                                             int columns, int rows);
+/// The bytes of such bins.
+uint64_t binBytes(const std::vector<std::vector<uint32_t>>& bins);
+
+/// Pixel (x, y) = idx of the frame from the set-up triangle that won it: its face and triangle ids
+/// (the scene's, through `derived`), as the outputs ask, and its exact eye depth at the centre. The
+/// caller writes the colour, which depends on its rule.
+inline void resolveWinner(const SetupTriangle& t, int x, int y, size_t idx, FrameOutputs outputs,
+                          const DerivedScene* derived, Frame& frame) {
+  if (has(outputs, FrameOutputs::FaceIds)) frame.faceId[idx] = int32_t(derived ? derived->face[t.face] : t.face);
+  if (has(outputs, FrameOutputs::TriangleIds))
+    frame.triangleId[idx] = int32_t(derived ? derived->triangle[t.triangle] : t.triangle);
+  frame.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
+}
+
+/// A frame's first step, the same for every drawing: the front end over `scene`, its set-up
+/// triangles flattened in submission order, timed on `timer` as the stage "frontend".
+std::vector<SetupTriangle> frontEndStep(const Scene& scene, const Camera& camera, const RenderOptions& options,
+                                        FrontEndOutput& fe, Timer& timer, Stats& st);
+
+/// The statistics every drawing fills, one way for all: the front end's counts, the counters,
+/// the memory of the set-up triangles, the front end's and the frame's (the caller adds its own
+/// buffers'), and the depth format when the drawing tested depth (`depthFormat` not null).
+void recordDrawStats(Stats& st, const FrontEndCounters& fe, uint64_t frontEndBytes, size_t setupTriangles,
+                     const DrawCounters& n, const DepthFormat* depthFormat, const Frame& frame);
 
 /// Draws `triangles` in their order into `frame` (sized by render(); cleared here) under `rule`
 /// and adds to `counters`; Frame::writes, when sized, gets each pixel's written fragments. With

@@ -399,11 +399,9 @@ void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& op
       st.setDetail("batches", c.batches);
     } else {
       FrontEndOutput fe;
-      runFrontEnd(scene, camera, options, fe);
-      triangles = fe.flatten();
+      triangles = frontEndStep(scene, camera, options, fe, timer, st);
       counters = fe;
       frontEndBytes = fe.memoryBytes();
-      st.addTime("frontend", timer.lap());
       if (frontToBack) {
         byFaceRank(faceRanks(faceKeys(scene, camera, SortKey::Min), /*backToFront=*/false))(triangles);
         st.addTime("order", timer.lap());
@@ -412,7 +410,7 @@ void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& op
     }
     hz.resolve(shade, n);
     st.addTime("raster", timer.lap());
-    recordZBufferStats(st, counters, frontEndBytes, triangles, n, options, frame);
+    recordDrawStats(st, counters, frontEndBytes, triangles.capacity(), n, &options.depthFormat, frame);
     hz.addMemory(st);
     if (!testTriangles) return;
     st.setDetail("levels", uint64_t(hz.levels()));

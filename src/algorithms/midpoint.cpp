@@ -248,9 +248,7 @@ void midpoint(const Scene& scene, const Camera& camera, const RenderOptions& opt
   Stats& st = frame.stats;
   const TriangleShader shade(scene, camera, options.shading);
   FrontEndOutput fe;
-  runFrontEnd(scene, camera, options, fe);
-  const std::vector<SetupTriangle> triangles = fe.flatten();
-  st.addTime("frontend", timer.lap());
+  const std::vector<SetupTriangle> triangles = frontEndStep(scene, camera, options, fe, timer, st);
   frame.clear(options.background, resolveThreads(options.threads));
   DrawCounters n;
   visitDepthFormat(options.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
@@ -261,7 +259,7 @@ void midpoint(const Scene& scene, const Camera& camera, const RenderOptions& opt
     st.addTime("raster", timer.lap());
     const MidpointCounts& c = mz.counts();
     n.depthTests = c.pointComparisons + c.pixelTests;  // the paper's z comparisons
-    recordZBufferStats(st, fe, fe.memoryBytes(), triangles, n, options, frame);
+    recordDrawStats(st, fe, fe.memoryBytes(), triangles.capacity(), n, &options.depthFormat, frame);
     mz.addMemory(st);
     st.setDetail("point_comparisons", c.pointComparisons);
     st.setDetail("pixel_tests", c.pixelTests);

@@ -33,9 +33,7 @@ namespace {
 // Fills the frame's pixel idx from the set-up triangle that won it.
 void resolvePixel(const SetupTriangle& t, Rgba8 color, const RenderOptions& options, int x, int y, size_t idx,
                   Frame& frame) {
-  if (has(options.outputs, FrameOutputs::FaceIds)) frame.faceId[idx] = int32_t(t.face);
-  if (has(options.outputs, FrameOutputs::TriangleIds)) frame.triangleId[idx] = int32_t(t.triangle);
-  frame.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
+  resolveWinner(t, x, y, idx, options.outputs, nullptr, frame);
   if (has(options.outputs, FrameOutputs::Color)) frame.color[idx] = color;
 }
 
@@ -47,30 +45,7 @@ void resolveBackground(const RenderOptions& options, size_t idx, Frame& frame) {
   if (!frame.color.empty()) frame.color[idx] = options.background;
 }
 
-// A copy of t that covers only the pixels of [x0, x1] x [y0, y1] (null box when none).
-SetupTriangle clippedTo(const SetupTriangle& t, int x0, int y0, int x1, int y1) {
-  SetupTriangle c = t;
-  c.minX = int16_t(std::max<int>(t.minX, x0));
-  c.minY = int16_t(std::max<int>(t.minY, y0));
-  c.maxX = int16_t(std::min<int>(t.maxX, x1));
-  c.maxY = int16_t(std::min<int>(t.maxY, y1));
-  return c;
-}
-
 // ---- region by region ----
-
-// Per region of the grid, the indices of the triangles whose screen box meets it, in order.
-std::vector<std::vector<uint32_t>> binByRegion(const std::vector<SetupTriangle>& tris, int rw, int rh, int columns,
-                                               int rows) {
-  std::vector<std::vector<uint32_t>> bins(size_t(columns) * size_t(rows));
-  for (uint32_t i = 0; i < tris.size(); ++i) {
-    const SetupTriangle& t = tris[i];
-    if (t.minX > t.maxX || t.minY > t.maxY) continue;
-    for (int ry = t.minY / rh; ry <= t.maxY / rh; ++ry)
-      for (int rx = t.minX / rw; rx <= t.maxX / rw; ++rx) bins[size_t(ry) * size_t(columns) + size_t(rx)].push_back(i);
-  }
-  return bins;
-}
 
 template <DepthStorage S, DepthMapping M>
 void drawRegions(const std::vector<SetupTriangle>& tris, const Camera& camera, const RenderOptions& options,
@@ -78,7 +53,7 @@ void drawRegions(const std::vector<SetupTriangle>& tris, const Camera& camera, c
   using Pixels = ZBufferPixels<S, M>;
   using T = typename Pixels::T;
   const int columns = (camera.width + rw - 1) / rw, rows = (camera.height + rh - 1) / rh;
-  const std::vector<std::vector<uint32_t>> bins = binByRegion(tris, rw, rh, columns, rows);
+  const std::vector<std::vector<uint32_t>> bins = binByCell(tris, rw, rh, columns, rows);
   const T clear = quantizeDepth<S>(options.depthFormat.clearValue());
   Timer timer;
   double clearMs = 0, rasterMs = 0, resolveMs = 0;
@@ -125,9 +100,7 @@ void drawRegions(const std::vector<SetupTriangle>& tris, const Camera& camera, c
   st.addTime("resolve", resolveMs);
   st.addMemory("depth_buffer", depth.size() * sizeof(T));
   st.addMemory("winner_ids", winner.size() * sizeof(uint32_t));
-  uint64_t binBytes = bins.capacity() * sizeof(bins[0]);
-  for (const auto& b : bins) binBytes += b.capacity() * sizeof(uint32_t);
-  st.addMemory("region_bins", binBytes);
+  st.addMemory("region_bins", binBytes(bins));
   st.setDetail("regions", uint64_t(columns) * uint64_t(rows));
 }
 
@@ -256,9 +229,7 @@ void drawWithFrontEnd(const Scene& scene, const Camera& camera, const RenderOpti
   Stats& st = frame.stats;
   const TriangleShader shade(scene, camera, options.shading);
   FrontEndOutput fe;
-  runFrontEnd(scene, camera, options, fe);
-  const std::vector<SetupTriangle> triangles = fe.flatten();
-  st.addTime("frontend", timer.lap());
+  const std::vector<SetupTriangle> triangles = frontEndStep(scene, camera, options, fe, timer, st);
   if (clearFrame) {
     frame.clear(options.background, resolveThreads(options.threads));
     st.addTime("clear", timer.lap());
@@ -272,7 +243,7 @@ void drawWithFrontEnd(const Scene& scene, const Camera& camera, const RenderOpti
   visitDepthFormat(options.depthFormat,
                    [&]<DepthStorage S, DepthMapping M>() { draw.template operator()<S, M>(triangles, colors, n); });
   st.addMemory("triangle_colors", colors.size() * sizeof(Rgba8));
-  recordZBufferStats(st, fe, fe.memoryBytes(), triangles, n, options, frame);
+  recordDrawStats(st, fe, fe.memoryBytes(), triangles.capacity(), n, &options.depthFormat, frame);
   st.setDetail("rasterizer", "halfspace");
 }
 

@@ -68,8 +68,6 @@ class ZBufferPixels {
   /// Face ids, eye depths and colours of every pixel from the last fragment written (depth only:
   /// the eye depth of the stored value), as the drawing service resolves; counts covered pixels.
   void resolve(std::span<const SetupTriangle> tris, const TriangleShader& shade, DrawCounters& n) {
-    const bool faceIds = has(options_.outputs, FrameOutputs::FaceIds);
-    const bool triangleIds = has(options_.outputs, FrameOutputs::TriangleIds);
     const bool color = has(options_.outputs, FrameOutputs::Color);
     for (int y = 0; y < camera_.height; ++y)
       for (int x = 0; x < camera_.width; ++x) {
@@ -81,9 +79,7 @@ class ZBufferPixels {
         } else {
           if (!winner_[idx]) continue;
           const SetupTriangle& t = tris[winner_[idx] - 1];
-          if (faceIds) frame_.faceId[idx] = int32_t(t.face);
-          if (triangleIds) frame_.triangleId[idx] = int32_t(t.triangle);
-          frame_.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
+          resolveWinner(t, x, y, idx, options_.outputs, nullptr, frame_);
           if (color) frame_.color[idx] = triangleColor(t, shade);
         }
         ++n.covered;
@@ -103,25 +99,5 @@ class ZBufferPixels {
   std::vector<T> depth_;          // the stored values
   std::vector<uint32_t> winner_;  // 1 + the index of the last triangle written, 0 = none (not kept for depth only)
 };
-
-/// The statistics every z-buffer of this kind reports, as drawScene fills them: front-end counts,
-/// the counters, the memory of the set-up triangles, the front end's and the frame's (the
-/// algorithm adds its own buffers'), the depth format.
-inline void recordZBufferStats(Stats& st, const FrontEndCounters& fe, uint64_t frontEndBytes,
-                               const std::vector<SetupTriangle>& triangles, const DrawCounters& n,
-                               const RenderOptions& options, const Frame& frame) {
-  st.depth_format = options.depthFormat.name();
-  st.triangles_clipped = fe.clipped;
-  st.triangles_degenerate = fe.degenerate;
-  st.culled_backface = fe.culledBackface;
-  st.culled_frustum = fe.culledFrustum;
-  st.depth_tests = n.depthTests;
-  st.depth_writes = n.depthWrites;
-  st.color_writes = n.colorWrites;
-  st.covered_pixels = n.covered;
-  st.addMemory("setup_triangles", triangles.capacity() * sizeof(SetupTriangle));
-  st.addMemory("front_end", frontEndBytes);
-  addFrameMemory(st, frame);
-}
 
 }  // namespace hsr::algo
