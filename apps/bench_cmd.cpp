@@ -62,7 +62,8 @@ BenchRecord timeFrames(const BenchFlags& f, const Job& job, hsr::Frame& frame) {
     const auto start = std::chrono::steady_clock::now();
     const hsr::Camera& camera = cameras[pose % cameras.size()];
     if (f.occlusion)  // depth kept in tiles, no image: what an occlusion culler pays per frame
-      occlusion.render(job.scene, camera, {job.options.depthFormat, job.options.cull, job.options.threads});
+      occlusion.render(job.scene, camera,
+                       {job.options.depthFormat, job.options.cull, job.options.threads, job.options.tiled});
     else
       renderer->render(camera, frame);  // reuses the frame's buffers
     const double ms = millisecondsSince(start);

@@ -160,6 +160,11 @@ void ViewFlags::declare(CLI::App& cmd) {
                  "each algorithm's parameters, values and defaults")
       ->type_name("KEY=VALUE")
       ->take_all();
+  cmd.add_option("--switch-off", switchesOff,
+                 "Turn off one of the tiled z-buffer's optimisations, repeatable: defer-back-faces, defer-clusters, "
+                 "mesh-culling, background-pump. The image is the same bits either way: to measure what each saves")
+      ->type_name("NAME")
+      ->check(CLI::IsMember(std::vector<std::string>(std::begin(hsr::kTiledSwitchNames), std::end(hsr::kTiledSwitchNames))));
   CLI::Option* depthOnlyFlag = cmd.add_flag(
       "--depth-only", depthOnly,
       "z-buffer keeps only depth: no face ids or colour; depth is the stored value mapped back to eye depth");
@@ -214,6 +219,7 @@ Job ViewFlags::prepare() const {
   ImageSize imageSize = parseSize(size);
   job.options = options;
   job.options.params = parsedParams();
+  for (const std::string& name : switchesOff) hsr::switchOff(job.options.tiled, name);
   job.options.outputs = frameOutputs();
   job.options.cull = valueOf(kCullNames, cull);
   job.options.shading = valueOf(kShadingNames, shading);

@@ -30,6 +30,7 @@ struct ViewFlags {
   std::string scene, cameraFile, size = "1280x720", depthFormat, background;
   std::string cull = "none", shading = "lambert";
   std::vector<std::string> params;  // --param KEY=VALUE, repeatable
+  std::vector<std::string> switchesOff;  // --switch-off NAME, repeatable
   bool depthOnly = false;
   std::string outputs;  // --outputs (not given: all)
   std::string eye, target, up;

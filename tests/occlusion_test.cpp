@@ -371,7 +371,7 @@ TEST(Occlusion, MeshBoundHoldsForEveryTriangle) {
 }
 
 // Mesh culling changes no stored value: the occlusion buffer with it (the default) and without
-// (HSR_MESH_CULLING=off) stores the same bits at every pixel, culling back faces or not, in
+// (the switch mesh-culling off) stores the same bits at every pixel, culling back faces or not, in
 // several formats, on 1 and 2 threads, whether each pass transforms only its meshes' vertices
 // or all are transformed up front (reversedVertices); and it does cull (the city's hidden
 // buildings).
@@ -387,9 +387,7 @@ TEST(Occlusion, MeshCullingChangesNoStoredValue) {
             const DepthFormat format = DepthFormat::parse(f);
             const std::string what = fmt::format("{} {} cull {} threads {}", scene.source, f, int(cull), threads);
             OcclusionBuffer without, with;
-            setenv("HSR_MESH_CULLING", "off", 1);
-            const Stats plain = without.render(scene, cam, {format, cull, threads});
-            unsetenv("HSR_MESH_CULLING");
+            const Stats plain = without.render(scene, cam, {format, cull, threads, {.meshCulling = false}});
             const Stats& st = with.render(scene, cam, {format, cull, threads});
             EXPECT_FALSE(plain.detailCount("meshes_culled_occlusion").has_value()) << what;
             culled += st.detailCount("meshes_culled_occlusion").value_or(0);
@@ -512,9 +510,9 @@ TEST(Occlusion, FramesWithIdsAndMeshCullingAreTheSameBits) {
             o.cull = cull;
             o.threads = threads;
             const std::string what = fmt::format("{} {} cull {} threads {}", scene.source, f, int(cull), threads);
-            setenv("HSR_MESH_CULLING", "off", 1);
+            o.tiled.meshCulling = false;
             const Frame plain = render(scene, cam, o);
-            unsetenv("HSR_MESH_CULLING");
+            o.tiled.meshCulling = true;
             const Frame frame = render(scene, cam, o);
             EXPECT_FALSE(plain.stats.detailCount("meshes_culled_occlusion").has_value()) << what;
             (tied ? culledTied : culled) += frame.stats.detailCount("meshes_culled_occlusion").value_or(0);

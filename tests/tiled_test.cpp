@@ -118,8 +118,9 @@ std::vector<CameraSpec> alongRay(const Scene& scene, std::initializer_list<doubl
 }
 
 Frame renderWith(const Scene& scene, const Camera& cam, DepthFormat format, RasterKind raster, int threads,
-                 FrameOutputs outputs = FrameOutputs::All) {
+                 FrameOutputs outputs = FrameOutputs::All, TiledSwitches switches = {}) {
   RenderOptions o;
+  o.tiled = switches;
   o.depthFormat = format;
   setRaster(o, raster);
   o.threads = threads;
@@ -1014,7 +1015,7 @@ TEST(Tiled, CulledClustersAreBackFacesEveryTriangle) {
 }
 
 // With --cull back the culled clusters change no bit and no count: frames and statistics equal
-// with them turned off (HSR_DEFER_CLUSTERS=off), 1 and 3 threads, a camera inside the sphere too.
+// with them turned off (the switch defer-clusters off), 1 and 3 threads, a camera inside the sphere too.
 TEST(Tiled, CulledClustersChangeNoBitNorCount) {
   const Scene scene = loadScene("builtin:sphere?n=20000");
   std::vector<CameraSpec> cameras = poses(scene, 3, 23);
@@ -1026,9 +1027,8 @@ TEST(Tiled, CulledClustersChangeNoBitNorCount) {
       o.cull = Cull::Back;
       o.threads = threads;
       const Frame on = render(scene, cam, o);
-      setenv("HSR_DEFER_CLUSTERS", "off", 1);
+      o.tiled.deferClusters = false;
       const Frame off = render(scene, cam, o);
-      unsetenv("HSR_DEFER_CLUSTERS");
       const std::string what = fmt::format("threads {}", threads);
       EXPECT_EQ(on.faceId, off.faceId) << what;
       EXPECT_EQ(on.triangleId, off.triangleId) << what;
@@ -1046,7 +1046,7 @@ TEST(Tiled, CulledClustersChangeNoBitNorCount) {
 }
 
 // Deferred back faces and clusters change nothing but the work: with clusters turned off
-// (HSR_DEFER_CLUSTERS=off) or all deferral (HSR_DEFER_BACK_FACES=off) every frame is the same
+// (the switch defer-clusters off) or all deferral (defer-back-faces off) every frame is the same
 // bits. Random triangles show many back faces (drawn late, after being set up again); a closed
 // mesh hides nearly all of them, which are then never binned to a tile list, ordered or visited
 // (counted as culled pairs) — except from inside, where its far side is deferred and shows.
@@ -1080,12 +1080,10 @@ TEST(Tiled, DeferredBackFacesChangeNoBit) {
         for (FrameOutputs outputs : {FrameOutputs::All, FrameOutputs::DepthOnly})
           for (int threads : {1, 3}) {
             const Frame on = renderWith(scene, cam, format, RasterKind::Tiled, threads, outputs);
-            setenv("HSR_DEFER_CLUSTERS", "off", 1);
-            const Frame facesOnly = renderWith(scene, cam, format, RasterKind::Tiled, threads, outputs);
-            unsetenv("HSR_DEFER_CLUSTERS");
-            setenv("HSR_DEFER_BACK_FACES", "off", 1);
-            const Frame off = renderWith(scene, cam, format, RasterKind::Tiled, threads, outputs);
-            unsetenv("HSR_DEFER_BACK_FACES");
+            const Frame facesOnly = renderWith(scene, cam, format, RasterKind::Tiled, threads, outputs,
+                                               {.deferClusters = false});
+            const Frame off = renderWith(scene, cam, format, RasterKind::Tiled, threads, outputs,
+                                         {.deferBackFaces = false});
             const std::string what = fmt::format("{} {} threads {}", c.scene, f, threads);
             EXPECT_EQ(facesOnly.faceId, off.faceId) << what;
             EXPECT_EQ(facesOnly.triangleId, off.triangleId) << what;
@@ -1141,7 +1139,7 @@ TEST(Tiled, ReusedFrameIsFullyOverwritten) {
 // rasterize the rest (zbuffer.cpp, tiled::BackgroundPump): a small object far off in a wide
 // frame whose rows do not start on cache lines (1000 and 1016 pixels wide: the pieces' partial
 // lines), rendered into a frame left full of other values, equals the reference for every set of
-// buffers and 1 to 3 threads, and the frame with the pumps turned off (HSR_BACKGROUND_PUMP=off).
+// buffers and 1 to 3 threads, and the frame with the pumps turned off (the switch background-pump off).
 TEST(Tiled, PumpedBackgroundIsTheReferences) {
   const Scene scene = loadScene("builtin:cubes");
   const Bounds3 b = scene.bounds();
@@ -1168,9 +1166,8 @@ TEST(Tiled, PumpedBackgroundIsTheReferences) {
           std::fill(f->faceId.begin(), f->faceId.end(), 7);
           std::fill(f->triangleId.begin(), f->triangleId.end(), 7);
           std::fill(f->color.begin(), f->color.end(), Rgba8{1, 2, 3, 4});
-          if (f == &unpumped) setenv("HSR_BACKGROUND_PUMP", "off", 1);
+          o.tiled.backgroundPump = f != &unpumped;
           render(scene, cam, o, *f);
-          unsetenv("HSR_BACKGROUND_PUMP");
         }
         const std::string what = fmt::format("width {}, outputs {}, threads {}", width, frameOutputsName(outputs), threads);
         EXPECT_EQ(pumped.faceId, unpumped.faceId) << what;

@@ -35,6 +35,7 @@ struct OcclusionOptions {
   DepthFormat depthFormat;  // default f32:reversed
   Cull cull = Cull::None;   // occluders are two-sided unless back/front
   int threads = 0;          // 0: all cores
+  TiledSwitches tiled;      // the tiled rasterizer's optimisations, all on (render.hpp)
 };
 
 /// Queries (rectVisible, boxVisible, storedAt, depthImage) only read the buffer: several threads

@@ -25,6 +25,21 @@ namespace hsr {
 enum class Cull : uint8_t { None, Back, Front };
 enum class Shading : uint8_t { Flat, Lambert, FaceId };
 
+/// The tiled z-buffer's and the occlusion buffer's optimisations, each of which leaves every image
+/// and stored depth the same bits: all on by default, turned off to test that and to measure
+/// what each saves (the command line's --switch-off NAME; docs/kernel.md).
+struct TiledSwitches {
+  bool deferBackFaces = true;  // defer-back-faces: with cull none, back faces set up after the front faces
+  bool deferClusters = true;   // defer-clusters: whole clusters facing away deferred (with cull back: culled)
+  bool meshCulling = true;     // mesh-culling: scenes of many meshes culled mesh by mesh (docs/occlusion.md)
+  bool backgroundPump = true;  // background-pump: idle tiles' background streamed between the kernel's blocks
+};
+/// The switches' names, as --switch-off takes them.
+inline constexpr const char* kTiledSwitchNames[] = {"defer-back-faces", "defer-clusters", "mesh-culling",
+                                                    "background-pump"};
+/// Turns off the switch `name` (kTiledSwitchNames); InputError for another name.
+void switchOff(TiledSwitches& switches, const std::string& name);
+
 struct RenderOptions {
   std::string algorithm = "zbuffer";
   /// The algorithm's own parameters, name -> value as text (`--param name=value`); those not
@@ -38,6 +53,7 @@ struct RenderOptions {
   int threads = 0;                        // 0: all cores
   bool verify = false;                    // also render the reference and count wrong pixels
   bool countWrites = false;               // fill Frame::writes: fragments written per pixel
+  TiledSwitches tiled;                    // zbuffer raster=tiled: its optimisations, all on
 };
 
 /// One algorithm made for one scene, kept from view to view: "build once, view many". What the

@@ -176,9 +176,9 @@ AlgorithmInfo bspAlgorithm() {
   a.params = {
       {"heuristic", ParamType::Choice, "scored", {"scored", "first"}, -1e300, 1e300,
        "the splitting plane of a node, through one of its polygons: first: the first polygon of its list (face "
-       "order); scored: of 8 candidates at positions i*m/8 of its m polygons, the one that splits the fewest of "
-       "the polygons at positions j*m/s (s = min(m, 1024)), ties broken by the least |front - back| of those, "
-       "then by the earliest position"},
+       "order); scored: of c = min(m, 8) candidates at positions i*m/c of its m polygons, the one that splits "
+       "the fewest of the polygons at positions j*m/s (s = min(m, 1024)), ties broken by the least "
+       "|front - back| of those, then by the earliest position"},
       {"max-fragments", ParamType::Int, "4000000", {}, 1, 1e9,
        "the most fragments the tree may hold: a build that would make more stops with an error"},
       drawRasterParam("binned"),

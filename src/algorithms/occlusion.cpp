@@ -46,15 +46,15 @@ constexpr uint64_t kFrameWaitingPerTile = 40;
 
 }  // namespace
 
-// HSR_MESH_CULLING=off turns mesh culling off, for tests and measurements (same depth bits).
-bool algo::meshCullingApplies(const Scene& scene, const Camera& camera) {
-  return !camera.orthographic && scene.meshes.size() >= kMinMeshes && !algo::switchedOff("HSR_MESH_CULLING");
+// The switch mesh-culling (TiledSwitches) turns it off, for tests and measurements (same depth bits).
+bool algo::meshCullingApplies(const Scene& scene, const Camera& camera, const TiledSwitches& switches) {
+  return !camera.orthographic && scene.meshes.size() >= kMinMeshes && switches.meshCulling;
 }
 
-bool algo::meshCullingPaysForFrame(const Scene& scene, const Camera& camera) {
+bool algo::meshCullingPaysForFrame(const Scene& scene, const Camera& camera, const TiledSwitches& switches) {
   const uint64_t tiles = uint64_t((camera.width + tiled::kTileSize - 1) / tiled::kTileSize) *
                          uint64_t((camera.height + tiled::kTileSize - 1) / tiled::kTileSize);
-  return scene.triangles.size() >= kFrameWaitingPerTile * tiles && meshCullingApplies(scene, camera);
+  return scene.triangles.size() >= kFrameWaitingPerTile * tiles && meshCullingApplies(scene, camera, switches);
 }
 
 struct OcclusionBuffer::Impl {
@@ -375,6 +375,7 @@ RenderOptions OcclusionBuffer::Impl::start(const Scene& scene, const Camera& cam
   opt.depthFormat = options.depthFormat;
   opt.cull = options.cull;
   opt.threads = options.threads;
+  opt.tiled = options.tiled;
   opt.outputs = FrameOutputs::DepthOnly;
   algo::beginStats(stats, scene, cam);
   threads = resolveThreads(opt.threads);
@@ -393,7 +394,7 @@ const algo::MeshCulling& algo::cullMeshes(OcclusionBuffer& buffer, const Scene& 
                                           const RenderOptions& options) {
   OcclusionBuffer::Impl& im = *buffer.impl_;
   im.width = im.height = 0;  // holds the first pass only: not to be queried
-  const RenderOptions opt = im.start(scene, camera, {options.depthFormat, options.cull, options.threads});
+  const RenderOptions opt = im.start(scene, camera, {options.depthFormat, options.cull, options.threads, options.tiled});
   Stats& st = im.stats;
   im.drawByMeshes(scene, opt, st, true);
   im.culling.depthTests = st.depth_tests;
@@ -409,7 +410,7 @@ const Stats& OcclusionBuffer::render(const Scene& scene, const Camera& camera, c
   Timer total, timer;
   const RenderOptions opt = im.start(scene, camera, options);
   Stats& st = im.stats;
-  if (algo::meshCullingApplies(scene, camera)) {
+  if (algo::meshCullingApplies(scene, camera, opt.tiled)) {
     im.drawByMeshes(scene, opt, st);
   } else {
     algo::setUpAndBin(scene, camera, opt, im.depth, im.state);

@@ -27,17 +27,10 @@ uint64_t TiledState::memoryBytes() const {
   return bytes;
 }
 
-bool switchedOff(const char* name) {
-  const char* value = std::getenv(name);
-  return value && !std::strcmp(value, "off");
-}
-
 bool deferBackFaces(const RenderOptions& opt) {
-  if (opt.cull != Cull::None) return false;  // culled already, or (cull front) nothing in front to draw first
-  return !switchedOff("HSR_DEFER_BACK_FACES");
+  // Culled already, or (cull front) nothing in front to draw first.
+  return opt.cull == Cull::None && opt.tiled.deferBackFaces;
 }
-
-bool deferClusters() { return !switchedOff("HSR_DEFER_CLUSTERS"); }
 
 void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt, const DepthSetup& depth,
                  TiledState& state, const FrontEndOutput* vertices, const std::vector<TriangleRange>* only) {
@@ -48,7 +41,7 @@ void setUpAndBin(const Scene& scene, const Camera& cam, const RenderOptions& opt
     tiled::binChunk(state.bins, chunk, state.fe.chunks[chunk], &depth);
   };
   const FrontEndOptions frontEnd{
-      .nearestFor = &depth, .deferBackFaces = deferBackFaces(opt), .deferClusters = deferClusters(), .only = only};
+      .nearestFor = &depth, .deferBackFaces = deferBackFaces(opt), .deferClusters = opt.tiled.deferClusters, .only = only};
   if (vertices)
     runSetUp(scene, cam, opt, *vertices, state.fe, bin, frontEnd);
   else

@@ -32,18 +32,10 @@ struct TiledState {
   uint64_t memoryBytes() const;
 };
 
-/// Whether environment variable `name` is set to "off" (the tiled path's switches below and the
-/// occlusion buffer's HSR_MESH_CULLING: each leaves the image the same bits, for tests and
-/// measurements).
-bool switchedOff(const char* name);
-
 /// Whether a frame defers its back faces (raster/tiled.hpp, binChunk): when it draws both sides
-/// (cull none). The environment variable HSR_DEFER_BACK_FACES=off turns it off, for tests and
-/// measurements: the image is the same bits either way.
+/// (cull none) and the switch is on (RenderOptions::tiled; the image is the same bits either way).
+/// Whole clusters that face away go too unless TiledSwitches::deferClusters is off.
 bool deferBackFaces(const RenderOptions& opt);
-/// Whether the deferral takes whole clusters that face away too (Scene::clusters, deferCluster):
-/// unless HSR_DEFER_CLUSTERS=off (same bits either way).
-bool deferClusters();
 
 /// Sets up the scene's triangles (runFrontEnd) and bins each chunk on the worker that set it up,
 /// while it is in that core's cache.

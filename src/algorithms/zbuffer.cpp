@@ -180,7 +180,8 @@ AlgorithmInfo zbufferAlgorithm() {
                            "mean of its vertices), depth-tested without depth writes; no order by one depth per face "
                            "is right for interpenetrating or cyclically overlapping faces (docs/transparency.md)"),
               {"clear", ParamType::Choice, "every-frame", {"every-frame", "half-range"}, -1e300, 1e300,
-               "half-range: the z-buffer is kept in the Frame and not cleared between frames; even frames use the "
+               "half-range: the z-buffer is kept by the algorithm object (a Renderer's, across its views) and not "
+               "cleared between frames; even frames use the "
                "lower half of its values, odd frames the upper half with the test reversed (one bit of precision "
                "less; the textbook loop on the half-space rasterizer, whatever raster says)"}};
   a.guarantee.kind = Guarantee::Kind::Exact;

@@ -84,8 +84,8 @@ bool nextIdlePiece(tiled::BackgroundPump& p) {
 // segment band by band across its tiles, so that the frame is written in long row pieces (see
 // tiled::resolveTile). Each tile has one owner, so no locks; counters are kept per tile and
 // summed in tile order. Segments with nothing binned are not units: the workers' pumps stream
-// their background while the others are rasterized (IdleSegments; off with
-// HSR_BACKGROUND_PUMP=off, the same bits; its effect: docs/benchmarks.md).
+// their background while the others are rasterized (IdleSegments; off with the switch
+// background-pump, the same bits; its effect: docs/benchmarks.md).
 void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const TriangleShader& shade, Frame& frame,
                TiledState& state, Counters& n, tiled::RasterCounters& total) {
   const tiled::Bins& bins = state.bins;
@@ -98,7 +98,7 @@ void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const Triangle
   std::vector<uint32_t>& idleList = state.idleSegments;
   busy.clear();
   idleList.clear();
-  const bool pump = !switchedOff("HSR_BACKGROUND_PUMP");
+  const bool pump = opt.tiled.backgroundPump;
   for (size_t seg = 0; seg < allSegments; ++seg) {
     const int ty = int(seg) / segmentsX, tx0 = (int(seg) % segmentsX) * kSegmentTiles;
     bool idle = pump;
@@ -188,10 +188,10 @@ void TiledZBuffer::draw(const Scene& scene, const Camera& cam, const RenderOptio
   constexpr size_t kByMeshesTriangles = 8192;
   const bool depthOnly = opt.outputs == FrameOutputs::DepthOnly;
   const bool byMeshes = scene.triangles.size() >= kByMeshesTriangles &&
-                        (depthOnly ? meshCullingApplies(scene, cam) : meshCullingPaysForFrame(scene, cam));
+                        (depthOnly ? meshCullingApplies(scene, cam, opt.tiled) : meshCullingPaysForFrame(scene, cam, opt.tiled));
   OcclusionBuffer& occluders = state_->occluders;
   if (byMeshes && depthOnly) {
-    occluders.render(scene, cam, {opt.depthFormat, opt.cull, opt.threads});
+    occluders.render(scene, cam, {opt.depthFormat, opt.cull, opt.threads, opt.tiled});
     timer.lap();
     occluders.depthImage(frame);  // (its statistics: the buffer's, and covered_pixels; render() names the algorithm)
     std::erase_if(st.time_ms, [](const auto& stage) { return stage.first == "total"; });
