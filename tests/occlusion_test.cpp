@@ -13,7 +13,9 @@
 
 #include "core/depth_map.hpp"
 #include "frontend/frontend.hpp"
-#include "raster/fragment_depth.hpp"
+#include "frontend/mesh_bounds.hpp"
+#include "frontend/triangle_setup.hpp"
+#include "setup/fragment_depth.hpp"
 #include "test_scenes.hpp"
 
 namespace hsr {

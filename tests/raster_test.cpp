@@ -17,9 +17,11 @@
 #include "core/shading.hpp"
 #include "core/stream_fill.hpp"
 #include "frontend/frontend.hpp"
-#include "raster/fragment_depth.hpp"
+#include "frontend/triangle_setup.hpp"
+#include "frontend/vertices.hpp"
 #include "raster/halfspace.hpp"
 #include "raster/scanline.hpp"
+#include "setup/fragment_depth.hpp"
 
 namespace hsr {
 namespace {

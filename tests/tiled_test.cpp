@@ -19,10 +19,13 @@
 #include <random>
 #include <set>
 
-#include "raster/edge.hpp"
-#include "raster/fragment_depth.hpp"
+#include "frontend/clusters.hpp"
+#include "frontend/frontend.hpp"
+#include "frontend/triangle_setup.hpp"
 #include "raster/halfspace.hpp"
 #include "raster/tiled.hpp"
+#include "setup/edge.hpp"
+#include "setup/fragment_depth.hpp"
 #include "temp_dir.hpp"
 #include "test_scenes.hpp"
 

@@ -10,7 +10,7 @@
 #include "core/parallel.hpp"
 #include "core/shading.hpp"
 #include "core/timer.hpp"
-#include "raster/fragment_depth.hpp"
+#include "setup/fragment_depth.hpp"
 #include "raster/halfspace.hpp"
 #include "raster/scanline.hpp"
 

@@ -36,6 +36,7 @@
 #include "core/shading.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
+#include "frontend/mesh_bounds.hpp"
 #include "raster/halfspace.hpp"
 
 namespace hsr::algo {

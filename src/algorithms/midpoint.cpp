@@ -37,7 +37,7 @@
 #include "core/shading.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
-#include "raster/edge.hpp"
+#include "setup/edge.hpp"
 #include "raster/halfspace.hpp"
 
 namespace hsr::algo {

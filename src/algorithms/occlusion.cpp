@@ -16,6 +16,8 @@
 #include "core/depth_map.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
+#include "frontend/mesh_bounds.hpp"
+#include "frontend/vertices.hpp"
 
 namespace hsr {
 

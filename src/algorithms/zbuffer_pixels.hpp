@@ -15,7 +15,7 @@
 #include "core/depth_map.hpp"
 #include "core/shading.hpp"
 #include "frontend/frontend.hpp"
-#include "raster/fragment_depth.hpp"
+#include "setup/fragment_depth.hpp"
 
 namespace hsr::algo {
 

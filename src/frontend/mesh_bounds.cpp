@@ -1,11 +1,11 @@
-// meshBounds (frontend.hpp): the occlusion buffer's test of a whole mesh — a pixel box and a
+// meshBounds (mesh_bounds.hpp): the occlusion buffer's test of a whole mesh — a pixel box and a
 // nearest stored value for all its triangles — for runs of meshes, several at once with SIMD
 // (Highway, dispatched at run time): one lane a mesh, the same arithmetic in the same order in
 // every lane, so a mesh's bound does not depend on its neighbours. The planes' distance and
 // the mapping to a stored value stay scalar, lane by lane.
 //
 // Why the box and the bound hold for every fragment of the mesh's triangles: as for a deferred
-// cluster (deferCluster, steps 2.-4. in frontend.cpp), with step 1's distance c from the eye to
+// cluster (deferCluster, steps 2.-4. in clusters.cpp), with step 1's distance c from the eye to
 // each triangle's plane taken from the mesh's planes instead of a normal cone: at least
 // |d - n . e| - dSlack - nSlack |e| (MeshPlane), less 1e-9 of the magnitudes involved for the
 // rounding of each triangle's n_t and d_t (a few ulps: its triangles are well shaped). The mesh
@@ -25,7 +25,9 @@
 #include <cmath>
 #include <limits>
 
-#include "frontend/frontend.hpp"
+#include "frontend/clusters.hpp"
+#include "frontend/mesh_bounds.hpp"
+#include "setup/fixed_point.hpp"
 
 #ifndef HSR_MESH_BOUNDS_ONCE
 #define HSR_MESH_BOUNDS_ONCE
@@ -62,7 +64,7 @@ void MeshBounds(const Scene& scene, size_t first, size_t last, const MeshView& m
   const V nearFar = hn::Set(d, cam.near + cam.far), nearV = hn::Set(d, cam.near), farV = hn::Set(d, cam.far);
   const V gx0 = hn::Set(d, -kGuardBandPixels), gx1 = hn::Set(d, cam.width + kGuardBandPixels);
   const V gy0 = hn::Set(d, -kGuardBandPixels), gy1 = hn::Set(d, cam.height + kGuardBandPixels);
-  const V room = hn::Set(d, 1.0 / 256);  // pixelBoxOf's (frontend.cpp)
+  const V room = hn::Set(d, 1.0 / 256);  // pixelBoxOf's (clusters.cpp)
   const V lastX = hn::Set(d, double(cam.width - 1)), lastY = hn::Set(d, double(cam.height - 1));
   const V eye[3] = {hn::Set(d, mv.eye.x), hn::Set(d, mv.eye.y), hn::Set(d, mv.eye.z)};
   const V gradient64 = hn::Set(d, mv.gradient / 64), edgeOn = hn::Set(d, kEdgeOn);
@@ -134,7 +136,7 @@ void MeshBounds(const Scene& scene, size_t first, size_t last, const MeshView& m
     const V guard = hn::Mul(hn::Add(margin, margin), invLo);
     inViewM = hn::And(inViewM, hn::And(hn::And(hn::Gt(hn::Sub(x0, gx0), guard), hn::Gt(hn::Sub(gx1, x1), guard)),
                                        hn::And(hn::Gt(hn::Sub(y0, gy0), guard), hn::Gt(hn::Sub(gy1, y1), guard))));
-    // Pixels whose centres a triangle inside may cover (pixelBoxOf in frontend.cpp).
+    // Pixels whose centres a triangle inside may cover (pixelBoxOf in clusters.cpp).
     const V bx0 = hn::Max(zero, hn::Ceil(hn::Sub(hn::Sub(x0, half), room)));
     const V bx1 = hn::Min(lastX, hn::Floor(hn::Add(hn::Sub(x1, half), room)));
     const V by0 = hn::Max(zero, hn::Ceil(hn::Sub(hn::Sub(y0, half), room)));

@@ -5,7 +5,7 @@
 // SIMD one (raster/tiled.hpp), which bins triangles into tiles, vectorises this block loop and
 // must match this one bit for bit. Consumed by the algorithms (algorithms/*.cpp).
 #pragma once
-#include "raster/edge.hpp"
+#include "setup/edge.hpp"
 
 namespace hsr {
 

@@ -6,7 +6,7 @@
 // the pair (d/w, 1/w), both affine in screen space; eye depth d = their ratio.
 // Calls visit(x, y, eyeDepth) in row order. Consumed by the algorithms (--raster scanline).
 #pragma once
-#include "raster/edge.hpp"
+#include "setup/edge.hpp"
 
 namespace hsr {
 

@@ -1,14 +1,15 @@
 // The SIMD tile kernel of the tiled rasterizer, written once against Highway and compiled per
 // instruction set by raster/tiled.cpp (foreach_target; one function exported, dispatched at run
-// time). RasterizeTile() runs the triangles binned to one tile, nearest first (orderTile), through
-// the tile's depth and triangle buffers (TileScratch); it runs on whichever worker owns the tile.
+// time). One long file because its steps are force-inlined into one loop per instruction set.
+// RasterizeTile() runs the triangles binned to one tile, nearest first (orderTile), through the
+// tile's depth and triangle buffers (TileScratch); it runs on whichever worker owns the tile.
 //
 // One vector holds up to 8 double lanes, one row of an 8x8 block (AVX-512: one vector per row,
 // AVX2: two, SSE4: four, scalar: eight). Every lane repeats the reference's arithmetic exactly:
-//  - coverage: the integer edge functions of raster/edge.hpp, exact in double (|E| < 2^50); for
+//  - coverage: the integer edge functions of setup/edge.hpp, exact in double (|E| < 2^50); for
 //    a triangle with a box of at most 4x4 pixels, set-up's list of the centres those functions
 //    cover (SetupTriangle::coverage);
-//  - depth: ((a*X + b*Y) + c) for the planes P and Q of raster/fragment_depth.hpp, their
+//  - depth: ((a*X + b*Y) + c) for the planes P and Q of setup/fragment_depth.hpp, their
 //    quotient (none when Q is 1: MappedPlanes::affine), std::clamp and quantizeDepth<S> — the
 //    same IEEE operations in the same order as fragmentStored<S>, which the reference
 //    (zbuffer.cpp with halfspace.hpp) calls, never fused (no MulAdd here; tiled.cpp is built
@@ -46,9 +47,9 @@
 
 #include "core/depth_map.hpp"
 #include "core/stream-inl.h"
-#include "raster/fragment_depth.hpp"
-#include "raster/edge.hpp"
 #include "raster/tiled.hpp"
+#include "setup/edge.hpp"
+#include "setup/fragment_depth.hpp"
 
 // For the kernel's lambdas that must not become calls: made calls, their captures would live
 // in memory. (Functions use HWY_INLINE, which forces inlining the same way.)
@@ -183,7 +184,7 @@ HWY_INLINE V Quantize(V v) {
 }
 
 // Stored values of a triangle's fragments at the pixel centres X (lanes) of the row whose
-// centre is Y, exactly as fragmentStored<S> (raster/fragment_depth.hpp) computes them:
+// centre is Y, exactly as fragmentStored<S> (setup/fragment_depth.hpp) computes them:
 // ((a X + b Y) + c) for P and Q, their quotient, clamp and rounding to storage.
 template <DepthStorage S>
 HWY_INLINE V StoredDepth(const MappedPlanes& m, V X, double Y) {
@@ -227,7 +228,7 @@ HWY_INLINE double NearestLane(V v) {
   return hn::GetLane(kGreater ? hn::MaxOfLanes(d, v) : hn::MinOfLanes(d, v));
 }
 
-// storedRangeOverRect (raster/fragment_depth.hpp) for an affine m (q = 1) lane by lane, over the
+// storedRangeOverRect (setup/fragment_depth.hpp) for an affine m (q = 1) lane by lane, over the
 // rectangles [left, right] (lanes) x [top, bottom], with the same operations: the same bits.
 // Given a X at the columns where p is least and most (aXLow, aXHigh: a left or a right).
 // For planes whose error pErr (planeError, over the tile) is below 1e280 only: then |a| x + |b| y
@@ -1044,7 +1045,7 @@ HWY_INLINE void DrawBlockRows(TileCtx<S, M, kIds>& c, const TriangleCtx& tri, co
         cover = hn::And(cover, hn::Ge(r.edgeRow[i][k / N], r.edgeBias[i]));
         r.edgeRow[i][k / N] = hn::Add(r.edgeRow[i][k / N], r.edgeStep[i]);
       }
-      // Pixel centres X = x + 0.5; depth = P(X, Y) / Q(X, Y) (raster/fragment_depth.hpp).
+      // Pixel centres X = x + 0.5; depth = P(X, Y) / Q(X, Y) (setup/fragment_depth.hpp).
       const V z = bs.constantDepth && !kUnclamped ? bs.zConstant
                                                   : StoredDepthAt<S, kUnclamped>(m, r.pX[k / N], pY, r.qX[k / N], Y);
       Mask win = hn::And(cover, Nearer<kGreater>(z, stored));
@@ -1175,7 +1176,7 @@ HWY_INLINE void DrawBlocks(TileCtx<S, M, kIds>& c, const TriangleCtx& tri, const
 // ---- The tile ----
 
 // The tile's end: exact block bounds for the deferred back faces' test after a front pass
-// (tiled.cpp, selectLate), and the counts added to the job's.
+// (tile_pass.cpp, selectLate), and the counts added to the job's.
 template <DepthStorage S, DepthMapping M, bool kIds>
 HWY_INLINE void FinishTile(TileCtx<S, M, kIds>& c) {
   const DU du;

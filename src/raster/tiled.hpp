@@ -1,8 +1,10 @@
 // The tiled (sort-middle) rasterizer behind the default z-buffer: prepareBins()/binChunk() sort
 // set-up triangles into per-tile lists in submission order, chunk by chunk (each chunk by the
-// worker that set it up); rasterizeTile() runs every triangle of one tile through the SIMD
-// kernel (raster/tile_kernel-inl.h) into a worker's tile-sized depth and triangle buffers;
-// resolveTile() writes (rows of) that tile into the Frame. Plain functions without threads: the
+// worker that set it up; binning.cpp); rasterizeTile() runs every triangle of one tile, in
+// orderTile's order (tile_pass.cpp), through the SIMD kernel (tile_kernel-inl.h, compiled and
+// dispatched in tiled.cpp) into a worker's tile-sized depth and triangle buffers, then the
+// deferred triangles that may show (tile_pass.cpp); resolveTile() writes (rows of) that tile into
+// the Frame; kept tiles answer depth queries (kept_tiles.cpp). Plain functions without threads: the
 // z-buffer (algorithms/zbuffer.cpp) calls them via parallelFor, one owner per tile, so no locks;
 // per-tile counters are summed in tile order. Back faces lying in one tile, and whole clusters of
 // triangles facing away from the eye, can be deferred: drawn after the tile's other triangles,
@@ -10,7 +12,7 @@
 //
 // Exactness: the kernel evaluates coverage with the same integer edge functions and depth with
 // the same double operations in the same order as the reference (raster/halfspace.hpp +
-// raster/fragment_depth.hpp + zbuffer.cpp), so face ids and stored depths are bit-identical to
+// setup/fragment_depth.hpp + zbuffer.cpp), so face ids and stored depths are bit-identical to
 // it for any thread count and instruction set.
 //
 // Uniform states ("lossless z-buffer compression", the Ukrainian paper): a tile starts cleared without
@@ -34,6 +36,7 @@
 #include <hsr/frame.hpp>
 #include <hsr/render.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <bit>
 #include <cstdint>
@@ -42,7 +45,10 @@
 #include <vector>
 
 #include "core/shading.hpp"
-#include "frontend/frontend.hpp"
+#include "frontend/chunks.hpp"
+#include "frontend/vertices.hpp"
+#include "setup/fragment_depth.hpp"
+#include "setup/setup_triangle.hpp"
 
 // Block counters of the kernel (RasterCounters::blocks*), on unless built with
 // -DHSR_RASTER_COUNTERS=0.
@@ -64,6 +70,16 @@ inline constexpr int kBlockSize = 8;
 inline constexpr int kBlocksPerTile = (kTileSize / kBlockSize) * (kTileSize / kBlockSize);
 
 static_assert(kDeferTile == kTileSize, "a deferred back face lies in one tile");
+
+/// The part of pixel box [minX, maxX] x [minY, maxY] (image pixels) in the tile whose first pixel
+/// is (tx0, ty0), in tile-local pixels: empty (x0 > x1 or y0 > y1) when they do not meet.
+struct TileBox {
+  int x0, y0, x1, y1;
+};
+inline TileBox boxInTile(int minX, int minY, int maxX, int maxY, int tx0, int ty0) {
+  return {std::max(minX - tx0, 0), std::max(minY - ty0, 0), std::min(maxX - tx0, kTileSize - 1),
+          std::min(maxY - ty0, kTileSize - 1)};
+}
 
 /// Room for set-up records that are written one by one, later, and only some of them (the
 /// deferred back faces that may show): allocated without being written, so that a first frame
@@ -351,7 +367,7 @@ const std::vector<TileEntry>& orderTile(const Bins& bins, int tile, const DepthS
 /// bit. The set-up needs Bins::projected and Bins::camera, which the caller sets after
 /// runFrontEnd (its FrontEndOutput::projected and camera, alive until the tile pass ends).
 ///
-/// Deferred clusters (FrontEndChunk::clusters, deferCluster in frontend.hpp): runs of 32
+/// Deferred clusters (FrontEndChunk::clusters, deferCluster in frontend/clusters.hpp): runs of 32
 /// well-shaped triangles that all face away from the eye by a margin are not set up by the
 /// front end at all; each is binned, as one item with its pixel box and a conservative nearest
 /// bound, to every tile the box overlaps (Bins::clusters). A tile tests it like a deferred face;

@@ -1,10 +1,11 @@
-// The stored depth of a fragment, and conservative bounds of it over a region. Shared by the
-// reference z-buffer (algorithms/zbuffer.cpp with --raster halfspace) and the tiled rasterizer
-// (raster/tiled.cpp, raster/tile_kernel-inl.h), so that both store the same bits.
+// The stored depth of a fragment, and conservative bounds of it over a region: pure functions of
+// a SetupTriangle and the frame's DepthSetup, on any thread. Shared by set-up (nearest bounds),
+// the reference z-buffer (algorithms/zbuffer.cpp with --raster halfspace) and the tiled
+// rasterizer (raster/binning.cpp, raster/tile_kernel-inl.h), so that all store the same bits.
 //
 // A fragment at pixel centre (X, Y) stores quantize(clamp(P(X, Y) / Q(X, Y), 0, 1)), where P
 // and Q are affine functions of the pixel position built once per triangle from its eye-depth
-// planes d = N / D (frontend.hpp: N = d/w, D = 1/w) and the depth mapping (mapPlanes below):
+// planes d = N / D (SetupTriangle: N = d/w, D = 1/w) and the depth mapping (mapPlanes below):
 // the mapping of the Ukrainian paper written as one ratio, so a fragment costs one division, not the
 // two of mapDepth(N / D). Mathematically the same value; the rounding differs by a few ulps.
 // (The scanline rasterizer of the lecture notes steps eye depth along a span instead and stores
@@ -25,9 +26,17 @@
 #include <limits>
 
 #include "core/depth_map.hpp"
-#include "frontend/frontend.hpp"
+#include "setup/fixed_point.hpp"
+#include "setup/setup_triangle.hpp"
 
 namespace hsr {
+
+/// The depth buffer a frame is drawn into: its format and the camera's clipping range.
+struct DepthSetup {
+  DepthFormat format;
+  double near = 0, far = 0;
+  bool orthographic = false;
+};
 
 /// The mapped depth of a triangle's fragments: v(x, y) = p(x, y) / q(x, y), q > 0. When q is a
 /// constant (`affine`), mapPlanes has divided p by it once and q is exactly 1: the mapped depth is
@@ -199,18 +208,24 @@ StoredRange storedRangeOverRect(const MappedPlanes& m, double pErr, double qErr,
   return storedRangeOfBounds<S, M>(m, pMin - pErr, pMax + pErr, qMin - qErr, qMax + qErr);
 }
 
-/// A stored value that no fragment of `t` is nearer than, for storage S and mapping M: every
-/// covered pixel centre lies in the snapped triangle, so storedRange over its corners bounds it.
-/// (setupBatch computes the same bits with SIMD.)
-template <DepthStorage S, DepthMapping M>
-double nearestStored(const SetupTriangle& t, const DepthSetup& depth) {
+/// storedRange over the snapped corners of `t`, in `depth`: every covered pixel centre lies in
+/// the snapped triangle, so no fragment of `t` is nearer / farther than the result.
+template <DepthStorage S, DepthMapping M, bool kFarthest = true>
+StoredRange triangleStoredRange(const SetupTriangle& t, const DepthSetup& depth) {
   double px[3], py[3];
   for (int i = 0; i < 3; ++i) {
     px[i] = double(t.x[i]) / double(kSubpixelOne);
     py[i] = double(t.y[i]) / double(kSubpixelOne);
   }
   const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, depth.near, depth.far, depth.orthographic);
-  return storedRange<S, M, false>(m, px, py, 3).nearest;
+  return storedRange<S, M, kFarthest>(m, px, py, 3);
+}
+
+/// A stored value that no fragment of `t` is nearer than, for storage S and mapping M.
+/// (setupBatch computes the same bits with SIMD.)
+template <DepthStorage S, DepthMapping M>
+double nearestStored(const SetupTriangle& t, const DepthSetup& depth) {
+  return triangleStoredRange<S, M, false>(t, depth).nearest;
 }
 
 /// nearestStored for the depth setup's format, chosen at run time.

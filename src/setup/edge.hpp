@@ -1,5 +1,6 @@
-// Integer edge functions of a SetupTriangle, shared by both rasterizers so their coverage is
-// identical by construction. Consumed by raster/halfspace.hpp and raster/scanline.hpp.
+// Integer edge functions of a SetupTriangle, shared by every rasterizer so their coverage is
+// identical by construction: set-up (coverage of small boxes), binning, the tiled kernel and the
+// reference rasterizers (raster/halfspace.hpp, raster/scanline.hpp). Pure functions, any thread.
 //
 // Edge i runs from vertex i to vertex i+1. For a point p (fixed point, 1/256 pixel):
 //   E_i(p) = dx * (p.y - a.y) - dy * (p.x - a.x),  dx = b.x - a.x, dy = b.y - a.y,
@@ -11,7 +12,8 @@
 #include <algorithm>
 #include <cstdint>
 
-#include "frontend/frontend.hpp"
+#include "setup/fixed_point.hpp"
+#include "setup/setup_triangle.hpp"
 
 namespace hsr {
 
