@@ -1,7 +1,7 @@
 // Testing a mesh whole for occlusion: a pixel box and a nearest stored depth for all of a mesh's
-// triangles (MeshBound), several meshes at once with SIMD (mesh_bounds.cpp). Made by the
-// occlusion buffer's mesh culling (algorithms/occlusion.cpp, hzb.cpp) on its workers, from a
-// MeshView made once per frame (meshView, clusters.cpp).
+// triangles (MeshBound), several meshes at once with SIMD (mesh_bounds.cpp). Asked for by the
+// mesh culling of the occlusion buffer (algorithms/occlusion.cpp) and of hzb, on their workers,
+// with a MeshView made once per frame (meshView, clusters.cpp).
 #pragma once
 #include <hsr/camera.hpp>
 #include <hsr/scene.hpp>
