@@ -1,7 +1,7 @@
 // Binning (tiled.hpp): prepareBins sizes a frame's bins; binChunk sorts one front-end chunk's
-// set-up triangles, deferred back faces and deferred clusters into per-tile lists, culling pairs
-// behind a triangle of the chunk that covers the tile. Plain code, no SIMD. binChunk runs on the
-// worker that set the chunk up (runFrontEnd's consumer); chunks share no output.
+// set-up triangles, deferred back faces and deferred clusters into per-tile lists (Bins) for the
+// tile pass, culling pairs behind a triangle of the chunk that covers the tile. Plain code; binChunk
+// runs on the worker that set the chunk up (runFrontEnd's consumer); chunks share no output.
 #include <algorithm>
 #include <atomic>
 #include <cmath>
