@@ -199,7 +199,6 @@ void abufferFrame(const Scene& scene, const Camera& camera, const RenderOptions&
   addFrameMemory(st, frame);
 }
 
-
 AlgorithmInfo abufferAlgorithm() {
   AlgorithmInfo a;
   a.name = "abuffer";

@@ -8,7 +8,6 @@
 #include "algorithms/algorithms.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
-#include "frontend/frontend.hpp"
 #include "raster/tiled.hpp"
 
 namespace hsr {
