@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The z-buffer's clearing saver measured: frames of an orbit rendered into one Frame by the
-# textbook loop with a buffer cleared every frame (the whole image as one region) against the
-# half-range buffer that is never cleared (docs/memory.md), and the regional buffer's cost. One
+# textbook loop with a buffer cleared every frame (zbuffer-regions with the whole image as one
+# region) against the half-range buffer (zbuffer-half-range) that is never cleared (docs/memory.md), and the regional buffer's cost. One
 # thread; the medians of `hsr bench` frames: the whole frame, and its clear + resolve stages
 # (what the trick changes; the drawing between them is the same loop). Prints Markdown.
 # Usage: scripts/bench-memory.sh [SIZE, default 1920x1080] [FRAMES, default 20]
@@ -24,5 +24,7 @@ print("%.2f / %.2f" % (j["median_ms"], st.get("clear", 0) + st.get("resolve", 0)
 echo "| scene ($size, $frames frames, 1 thread), frame / clear + resolve, ms | cleared every frame | half-range | region=64x64 |"
 echo "|---|---|---|---|"
 for scene in $scenes; do
-  echo "| \`$scene\` | $(timed "$scene" --param "region=$size") | $(timed "$scene" --param clear=half-range) | $(timed "$scene" --param region=64x64) |"
+  echo "| \`$scene\` | $(timed "$scene" --algorithm zbuffer-regions --param "region=$size") |" \
+    "$(timed "$scene" --algorithm zbuffer-half-range) |" \
+    "$(timed "$scene" --algorithm zbuffer-regions --param region=64x64) |"
 done

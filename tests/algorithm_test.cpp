@@ -15,21 +15,28 @@ TEST(Algorithms, RegistryDeclaresZBufferAndRaycast) {
   ASSERT_NE(z, nullptr);
   ASSERT_NE(r, nullptr);
   EXPECT_EQ(z->guarantee.kind, Guarantee::Kind::Exact);
-  ASSERT_EQ(z->params.size(), 6u);
+  ASSERT_EQ(z->params.size(), 2u);
   EXPECT_EQ(z->params[0].name, "raster");
   EXPECT_EQ(z->params[0].defaultValue, "tiled");
   EXPECT_EQ(z->params[0].choices, (std::vector<std::string>{"tiled", "halfspace", "scanline", "binned"}));
-  EXPECT_EQ(z->params[1].name, "depth-slices");
-  EXPECT_EQ(z->params[1].defaultValue, "1");
-  EXPECT_EQ(z->params[2].name, "occlusion-cull");
-  EXPECT_EQ(z->params[2].type, ParamType::Bool);
-  EXPECT_EQ(z->params[2].defaultValue, "off");
-  EXPECT_EQ(z->params[3].name, "region");
-  EXPECT_EQ(z->params[3].type, ParamType::Size);
-  EXPECT_EQ(z->params[3].defaultValue, "full");
-  EXPECT_EQ(z->params[4].name, "sort-key");
-  EXPECT_EQ(z->params[5].name, "clear");
-  EXPECT_EQ(z->params[5].choices, (std::vector<std::string>{"every-frame", "half-range"}));
+  EXPECT_EQ(z->params[1].name, "sort-key");
+  // The documents' variants of the z-buffer are algorithms of their own, each with only the
+  // parameters it uses.
+  const AlgorithmInfo* sliced = findAlgorithm("zbuffer-sliced");
+  ASSERT_NE(sliced, nullptr);
+  ASSERT_EQ(sliced->params.size(), 2u);
+  EXPECT_EQ(sliced->params[0].name, "slices");
+  EXPECT_EQ(sliced->params[0].defaultValue, "4");
+  EXPECT_EQ(sliced->params[1].choices, (std::vector<std::string>{"halfspace", "scanline", "binned"}));
+  const AlgorithmInfo* regions = findAlgorithm("zbuffer-regions");
+  ASSERT_NE(regions, nullptr);
+  ASSERT_EQ(regions->params.size(), 1u);
+  EXPECT_EQ(regions->params[0].type, ParamType::Size);
+  EXPECT_EQ(regions->params[0].defaultValue, "64x64");
+  ASSERT_NE(findAlgorithm("zbuffer-half-range"), nullptr);
+  EXPECT_TRUE(findAlgorithm("zbuffer-half-range")->params.empty());
+  ASSERT_NE(findAlgorithm("zbuffer-culled"), nullptr);
+  EXPECT_TRUE(findAlgorithm("zbuffer-culled")->params.empty());
   EXPECT_TRUE(r->params.empty());
   for (const AlgorithmInfo& a : algorithms()) {
     EXPECT_FALSE(a.summary.empty()) << a.name;

@@ -305,8 +305,9 @@ TEST_F(CommandLine, AlgorithmsMarkdownPrintsParameterTables) {
   ASSERT_EQ(all.status, 0) << all;
   for (const char* text : {"## zbuffer\n\n| `--param` | type | default | values | what |\n|---|---|---|---|---|\n",
                            "| `raster` | choice | `tiled` | `tiled`, `halfspace`, `scanline`, `binned` | ",
-                           "| `depth-slices` | int | `1` | 1 to 64 | ", "| `region` | size | `full` | `WxH` (each 1 to 16384), `full` | ",
-                           "| `occlusion-cull` | bool | `off` | `on`, `off` | ", "\n## raycast\n\nNone.\n", "\\|front - back\\|"})
+                           "## zbuffer-sliced\n", "| `slices` | int | `4` | 1 to 64 | ",
+                           "| `region` | size | `64x64` | `WxH` (each 1 to 16384), `full` | ",
+                           "## hzb\n", "| `occlusion-cull` | bool | `off` | `on`, `off` | ", "\n## raycast\n\nNone.\n", "\\|front - back\\|"})
     EXPECT_NE(all.out.find(text), std::string::npos) << text << "\n" << all;
   Result one = hsr("algorithms --markdown raycast");
   ASSERT_EQ(one.status, 0) << one;

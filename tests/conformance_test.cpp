@@ -59,10 +59,10 @@ TEST(Conformance, TheBuiltInAlgorithmsAreAllCovered) {
 TEST(Conformance, TheZbufferDrawnInDepthSlicesIsExact) {
   const conformance::Plan plan = conformance::suitePlan();
   for (const std::map<std::string, std::string>& params :
-       {std::map<std::string, std::string>{{"raster", "halfspace"}, {"depth-slices", "3"}},
-        std::map<std::string, std::string>{{"raster", "binned"}, {"depth-slices", "7"}},
-        std::map<std::string, std::string>{{"raster", "binned"}, {"depth-slices", "16"}}}) {
-    const conformance::Variant variant{findAlgorithm("zbuffer"), params};
+       {std::map<std::string, std::string>{{"raster", "halfspace"}, {"slices", "3"}},
+        std::map<std::string, std::string>{{"raster", "binned"}, {"slices", "7"}},
+        std::map<std::string, std::string>{{"raster", "binned"}, {"slices", "16"}}}) {
+    const conformance::Variant variant{findAlgorithm("zbuffer-sliced"), params};
     const std::vector<std::string> failures = conformance::check(variant, plan);
     for (size_t i = 0; i < std::min<size_t>(failures.size(), 5); ++i) ADD_FAILURE() << failures[i];
     EXPECT_TRUE(failures.empty()) << variant.describe() << ": " << failures.size() << " violations";
@@ -74,7 +74,7 @@ TEST(Conformance, TheZbufferDrawnInDepthSlicesIsExact) {
 TEST(Conformance, TheZbufferDrawnRegionByRegionIsExact) {
   const conformance::Plan plan = conformance::suitePlan();
   for (const char* region : {"1x1", "7x5", "64x64", "1000x3"}) {
-    const conformance::Variant variant{findAlgorithm("zbuffer"), {{"region", region}}};
+    const conformance::Variant variant{findAlgorithm("zbuffer-regions"), {{"region", region}}};
     const std::vector<std::string> failures = conformance::check(variant, plan);
     for (size_t i = 0; i < std::min<size_t>(failures.size(), 5); ++i) ADD_FAILURE() << failures[i];
     EXPECT_TRUE(failures.empty()) << variant.describe() << ": " << failures.size() << " violations";
@@ -87,7 +87,7 @@ TEST(Conformance, DepthSlicesRemoveZFighting) {
   const conformance::Pose pose{*scene.camera};
   const DepthFormat u16 = DepthFormat::parse("u16:z");
   auto ambiguous = [&](const char* slices) {
-    const conformance::Variant v{findAlgorithm("zbuffer"), {{"raster", "binned"}, {"depth-slices", slices}}};
+    const conformance::Variant v{findAlgorithm("zbuffer-sliced"), {{"raster", "binned"}, {"slices", slices}}};
     const conformance::Outcome o = conformance::run(v, "builtin:zfight", scene, pose, 128, 96, u16);
     EXPECT_EQ(o.wrong, 0u) << o.replay;
     return o.ambiguous;

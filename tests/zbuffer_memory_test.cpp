@@ -1,4 +1,5 @@
-// The z-buffer's memory and clearing savers (src/algorithms/zbuffer_memory.cpp) and the memory
+// The z-buffer's memory and clearing savers (src/algorithms/zbuffer_regions.cpp,
+// zbuffer_half_range.cpp) and the memory
 // statistics per buffer: the regional z-buffer gives the textbook z-buffer's image bit for bit
 // with a region's buffer; the half-range z-buffer, never cleared between frames, gives over many
 // frames what each frame drawn from a cleared buffer gives; the documents' memory figures are
@@ -18,8 +19,10 @@ Camera cameraFor(const Scene& scene, int w, int h) {
   return resolveCamera(scene.camera ? *scene.camera : frameBounds(scene.bounds()), w, h, scene.bounds());
 }
 
-RenderOptions optionsWith(std::map<std::string, std::string> params, const char* format = "f32:reversed") {
+RenderOptions optionsWith(std::map<std::string, std::string> params, const char* format = "f32:reversed",
+                          const char* algorithm = "zbuffer") {
   RenderOptions o;
+  o.algorithm = algorithm;
   o.params = std::move(params);
   o.depthFormat = DepthFormat::parse(format);
   o.threads = 1;
@@ -45,7 +48,7 @@ TEST(RegionalZBuffer, SameImageAsTheWholeBufferWithARegionsMemory) {
     const Camera cam = cameraFor(scene, 203, 117);
     const Frame whole = render(scene, cam, optionsWith({{"raster", "halfspace"}}, "u16:z"));
     for (const char* region : {"1x1", "16x16", "50x7", "203x117", "999x999"}) {
-      const Frame regional = render(scene, cam, optionsWith({{"region", region}}, "u16:z"));
+      const Frame regional = render(scene, cam, optionsWith({{"region", region}}, "u16:z", "zbuffer-regions"));
       const std::string what = std::string(name) + " region=" + region;
       expectSameImage(regional, whole, what);
       EXPECT_EQ(regional.stats.depth_tests, whole.stats.depth_tests) << what;
@@ -61,10 +64,13 @@ TEST(RegionalZBuffer, BadSizesAreRefused) {
   const Scene scene = loadScene("builtin:cubes");
   const Camera cam = cameraFor(scene, 40, 30);
   for (const char* bad : {"0x4", "4x0", "4", "x4", "4x", "4.5x4", "-4x4", "4x4x4", "nanx4", "99999x4"})
-    EXPECT_THROW(render(scene, cam, optionsWith({{"region", bad}})), InputError) << bad;
-  EXPECT_THROW(render(scene, cam, optionsWith({{"region", "8x8"}, {"clear", "half-range"}})), InputError);
-  EXPECT_THROW(render(scene, cam, optionsWith({{"region", "8x8"}, {"raster", "scanline"}})), InputError);
-  EXPECT_THROW(render(scene, cam, optionsWith({{"region", "8x8"}, {"depth-slices", "2"}})), InputError);
+    EXPECT_THROW(render(scene, cam, optionsWith({{"region", bad}}, "f32:reversed", "zbuffer-regions")), InputError)
+        << bad;
+  // The variants' parameters are their own: no combination to refuse by hand.
+  EXPECT_THROW(render(scene, cam, optionsWith({{"region", "8x8"}})), InputError);
+  EXPECT_THROW(render(scene, cam, optionsWith({{"raster", "scanline"}}, "f32:reversed", "zbuffer-regions")),
+               InputError);
+  EXPECT_THROW(render(scene, cam, optionsWith({{"slices", "2"}}, "f32:reversed", "zbuffer-half-range")), InputError);
 }
 
 // Frames of an orbit drawn by one algorithm object without clearing its buffer: each the same bits as that frame drawn
@@ -75,7 +81,7 @@ TEST(HalfRangeZBuffer, ManyFramesWithoutClearingGiveTheClearedImages) {
   const Bounds3 b = scene.bounds();
   const std::vector<Camera> orbit = orbitCameras(first, (b.lo + b.hi) * 0.5, 9);
   for (const char* format : {"f32:reversed", "u16:z", "u24:z", "u32:inv", "f32:linear"}) {
-    RenderOptions o = optionsWith({{"clear", "half-range"}}, format);
+    RenderOptions o = optionsWith({}, format, "zbuffer-half-range");
     Renderer renderer(scene, o);  // keeps the half-range buffer from frame to frame
     Frame kept;
     for (size_t i = 0; i < orbit.size(); ++i) {
@@ -89,7 +95,7 @@ TEST(HalfRangeZBuffer, ManyFramesWithoutClearingGiveTheClearedImages) {
       if (i > 0) EXPECT_GT(*kept.stats.detailCount("pixels_reset") + kept.stats.covered_pixels, 0u) << what;
     }
   }
-  RenderOptions verify = optionsWith({{"clear", "half-range"}});
+  RenderOptions verify = optionsWith({}, "f32:reversed", "zbuffer-half-range");
   verify.verify = true;
   Renderer verified(scene, verify);
   Frame kept;
@@ -108,7 +114,7 @@ TEST(HalfRangeZBuffer, NoStaleSurfaceSurvivesTwoFrames) {
   const double size = glm::length(scene.bounds().hi - scene.bounds().lo);
   far.cameraFromWorld[3] += glm::dvec4(0.3 * size, 0, 0.5 * size, 0);  // the scene moved aside and away
   far.far += 0.5 * size;
-  RenderOptions o = optionsWith({{"clear", "half-range"}});
+  RenderOptions o = optionsWith({}, "f32:reversed", "zbuffer-half-range");
   Renderer renderer(scene, o);
   Frame kept;
   for (const Camera* cam : std::vector<const Camera*>{&near, &far, &far, &near, &far}) {

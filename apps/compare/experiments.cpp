@@ -43,7 +43,10 @@ Json zfightExperiment(const StudySettings& settings, bool quick) {
       RenderOptions options;
       options.depthFormat = DepthFormat::parse(z.format);
       options.threads = settings.threads;
-      if (z.slices > 1) options.params = {{"raster", "binned"}, {"depth-slices", std::to_string(z.slices)}};
+      if (z.slices > 1) {
+        options.algorithm = "zbuffer-sliced";
+        options.params = {{"raster", "binned"}, {"slices", std::to_string(z.slices)}};
+      }
       const auto start = std::chrono::steady_clock::now();
       const Frame frame = render(scene, camera, options);
       const double ms = millisecondsSince(start);

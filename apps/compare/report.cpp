@@ -168,7 +168,7 @@ void writeZfight(std::ostream& o, const Json& results) {
        "10<sup>4</sup>) at relative gaps 10<sup>-2</sup> to 10<sup>-5</sup>: pixels showing the wrong one per depth "
        "format (chart above), and the pictures at each gap. \"In N parts\" is the KTH thesis's mitigation: the depth "
        "range drawn in N parts of equal far/near ratio, farthest first, each with the format's whole precision "
-       "(<code>zbuffer --param raster=binned --param depth-slices=N</code>); its cost is the time beside it.</p>\n";
+       "(<code>zbuffer-sliced --param slices=N</code>); its cost is the time beside it.</p>\n";
   std::string gap;
   for (const Json& z : results["zfight"]) {
     const std::string g = fmt::format("{:g}", z["gap"].get<double>());

@@ -106,25 +106,6 @@ std::vector<std::string> listPriorityFailureScenes(const std::string& key);
 /// their triangles drawn with a depth test at every pixel).
 void zbufferOcclusionCulled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
 
-/// The textbook z-buffer region by region with a z-buffer of one region's size (region=WxH):
-/// zbuffer_memory.cpp.
-void zbufferInRegions(const Scene& scene, const Camera& camera, const RenderOptions& options, int regionWidth,
-                      int regionHeight, DrawBuffers& buffers, Frame& frame);
-
-/// The textbook z-buffer with half the depth range per frame instead of a clear (clear=half-range,
-/// zbuffer_memory.cpp): the buffer it keeps between frames is this object's.
-class HalfRangeZBuffer {
- public:
-  HalfRangeZBuffer();
-  ~HalfRangeZBuffer();
-  void draw(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
-
-  struct Buffer;  // of one depth format (zbuffer_memory.cpp)
-
- private:
-  std::unique_ptr<Buffer> buffer_;  // for the last frame's size and depth format
-};
-
 /// The production z-buffer: binned, tiled, SIMD, multithreaded (zbuffer_tiled.cpp), with the
 /// bins, tile buffers and occlusion buffer it keeps from one frame to the next.
 class TiledZBuffer {

@@ -46,55 +46,175 @@ struct UnderSum {
   }
 };
 
-// One frame's per-pixel state and the rule's work on it, for depth storage S and mapping M
-// (used by DepthTest only; the other rules keep no depth buffer).
-template <WriteRule R, DepthStorage S, DepthMapping M>
+// ---- The write rules, each a policy: what a fragment does to its pixel ----
+//
+// A rule's write(p, f, n) applies fragment f to its pixel in the per-pixel state p (Pixels
+// below) and says whether it wrote; the writer counts a write one way for all (countWritten).
+// kDepth: it keeps a depth buffer; kColorAtResolve: a pixel's colour is its winner's, written
+// when resolved (else the rule composites colour as it draws); kStopsWhenFull: nothing drawn
+// once every pixel is `filled` can change the image.
+
+// What a rule sees of one fragment: its triangle's index, its pixel and stored depth value.
+template <class T>
+struct Fragment {
+  uint32_t i;
+  int x, y;
+  size_t idx;
+  T z;
+};
+
+// The z-buffer: written where strictly nearer than the stored depth (ties keep the first).
+struct DepthTestRule {
+  static constexpr WriteRule kRule = WriteRule::DepthTest;
+  static constexpr bool kDepth = true, kColorAtResolve = true, kStopsWhenFull = false;
+  template <class P, class T>
+  static bool write(P& p, const Fragment<T>& f, DrawCounters& n) {
+    if (!depthTest<P::kMapping>(f.z, p.depth[f.idx], n)) return false;
+    if (p.keepWinner) p.winner[f.idx] = f.i + 1;
+    return true;
+  }
+};
+
+// The painter's: every fragment overwrites.
+struct OverwriteRule {
+  static constexpr WriteRule kRule = WriteRule::Overwrite;
+  static constexpr bool kDepth = false, kColorAtResolve = true, kStopsWhenFull = false;
+  template <class P, class T>
+  static bool write(P& p, const Fragment<T>& f, DrawCounters&) {
+    p.winner[f.idx] = f.i + 1;
+    return true;
+  }
+};
+
+// The reverse painter's: written only where nothing was written yet.
+struct WhereUnwrittenRule {
+  static constexpr WriteRule kRule = WriteRule::WhereUnwritten;
+  static constexpr bool kDepth = false, kColorAtResolve = true, kStopsWhenFull = true;
+  template <class P, class T>
+  static bool write(P& p, const Fragment<T>& f, DrawCounters& n) {
+    if (p.winner[f.idx]) return false;
+    ++n.filled;
+    p.winner[f.idx] = f.i + 1;
+    return true;
+  }
+};
+
+// Transparency back to front: the colour composited over by the triangle's alpha; ids overwritten.
+struct BlendRule {
+  static constexpr WriteRule kRule = WriteRule::Blend;
+  static constexpr bool kDepth = false, kColorAtResolve = false, kStopsWhenFull = false;
+  template <class P, class T>
+  static bool write(P& p, const Fragment<T>& f, DrawCounters&) {
+    p.winner[f.idx] = f.i + 1;
+    if (p.color) p.frame.color[f.idx] = over(p.colorOf(f.i), p.frame.color[f.idx]);
+    return true;
+  }
+};
+
+// The z-buffer's transparent pass: depth-tested; an opaque triangle writes depth, a transparent
+// one only composites its colour over. The ids show the nearest fragment drawn, transparent or not.
+struct DepthTestBlendRule {
+  static constexpr WriteRule kRule = WriteRule::DepthTestBlend;
+  static constexpr bool kDepth = true, kColorAtResolve = false, kStopsWhenFull = false;
+  template <class P, class T>
+  static bool write(P& p, const Fragment<T>& f, DrawCounters& n) {
+    if (!passesDepthTest<P::kMapping>(f.z, p.depth[f.idx], n)) return false;
+    const Rgba8 c = p.colorOf(f.i);
+    if (c.a == 255) storeDepth(f.z, p.depth[f.idx], n);
+    const double d = p.tris[f.i].eyeDepth(f.x + 0.5, f.y + 0.5);
+    if (d < p.nearest[f.idx]) {
+      p.nearest[f.idx] = d;
+      p.winner[f.idx] = f.i + 1;
+    }
+    if (p.color) p.frame.color[f.idx] = over(c, p.frame.color[f.idx]);
+    return true;
+  }
+};
+
+// The reverse painter's with transparency: front to back, each fragment composited under what
+// the pixel holds until it is opaque; ids the first (nearest); the background under all at the end.
+struct BlendUnderRule {
+  static constexpr WriteRule kRule = WriteRule::BlendUnder;
+  static constexpr bool kDepth = false, kColorAtResolve = false, kStopsWhenFull = true;
+  template <class P, class T>
+  static bool write(P& p, const Fragment<T>& f, DrawCounters& n) {
+    if (p.color ? p.sums[f.idx].through == 0 : p.winner[f.idx] != 0) return false;  // opaque: nothing behind shows
+    if (!p.winner[f.idx]) p.winner[f.idx] = f.i + 1;  // the first fragment is the nearest
+    if (!p.color) {
+      ++n.filled;
+      return true;
+    }
+    p.sums[f.idx].addUnder(p.colorOf(f.i));
+    if (p.sums[f.idx].through == 0) ++n.filled;
+    return true;
+  }
+};
+
+// One frame's per-pixel state, for depth storage S and mapping M (the depth buffer is used by the
+// depth rules only): what the rules read and write.
+template <DepthStorage S, DepthMapping M>
+struct Pixels {
+  using T = DepthT<S>;
+  static constexpr DepthMapping kMapping = M;
+  std::span<const SetupTriangle> tris;
+  const TriangleShader& shade;
+  const DerivedScene* derived;
+  Frame& frame;
+  bool keepWinner, color;
+  std::vector<T>& depth;           // the depth rules: the stored values
+  std::vector<uint32_t>& winner;   // 1 + the index of the winning (last written) triangle, 0 = none
+  std::vector<double> nearest;     // DepthTestBlend: the eye depth of the winner's fragment
+  std::vector<UnderSum> sums;      // BlendUnder: each pixel's blend so far
+
+  Rgba8 colorOf(uint32_t i) const { return algo::colorOf(tris[i], shade, derived); }
+};
+
+// The drawing service's writer under rule R: the frame's pixels, fragment by fragment, then
+// resolved into face ids, exact eye depths and colours.
+template <class R, DepthStorage S, DepthMapping M>
 class FragmentWriter {
  public:
   using T = DepthT<S>;
-  static constexpr bool kDepth = R == WriteRule::DepthTest || R == WriteRule::DepthTestBlend;
 
   FragmentWriter(std::span<const SetupTriangle> tris, const Camera& cam, const RenderOptions& opt,
                  const TriangleShader& shade, DrawBuffers& buffers, Frame& frame, const DerivedScene* derived)
-      : tris_(tris), cam_(cam), opt_(opt), shade_(shade), frame_(frame), derived_(derived),
-        keepWinner_(R != WriteRule::DepthTest || opt.outputs != FrameOutputs::DepthOnly),
-        color_(has(opt.outputs, FrameOutputs::Color)),
-        clear_(quantizeDepth<S>(opt.depthFormat.clearValue())), depth_(buffers.depth<T>()),
-        winner_(buffers.winner()) {
+      : cam_(cam), opt_(opt), clear_(quantizeDepth<S>(opt.depthFormat.clearValue())),
+        p_{tris,
+           shade,
+           derived,
+           frame,
+           /*keepWinner=*/R::kRule != WriteRule::DepthTest || opt.outputs != FrameOutputs::DepthOnly,
+           /*color=*/has(opt.outputs, FrameOutputs::Color),
+           buffers.depth<T>(),
+           buffers.winner(),
+           {},
+           {}} {
     const size_t pixels = size_t(cam.width) * size_t(cam.height);
-    if constexpr (kDepth) depth_.assign(pixels, clear_);
-    else depth_.clear();
-    if constexpr (R == WriteRule::DepthTestBlend) nearest_.assign(pixels, INFINITY);
-    if constexpr (R == WriteRule::BlendUnder) {
-      if (color_) sums_.assign(pixels, UnderSum{});
-      else sums_.clear();
-    }
-    if (keepWinner_) winner_.assign(pixels, 0);
-    else winner_.clear();
+    if constexpr (R::kDepth) p_.depth.assign(pixels, clear_);
+    else p_.depth.clear();
+    if constexpr (R::kRule == WriteRule::DepthTestBlend) p_.nearest.assign(pixels, INFINITY);
+    if constexpr (R::kRule == WriteRule::BlendUnder)
+      if (p_.color) p_.sums.assign(pixels, UnderSum{});
+    if (p_.keepWinner) p_.winner.assign(pixels, 0);
+    else p_.winner.clear();
   }
 
   void addMemory(Stats& st) const {
-    st.addMemory("depth_buffer", depth_.size() * sizeof(T));
-    st.addMemory("winner_ids", winner_.size() * sizeof(uint32_t));
+    st.addMemory("depth_buffer", p_.depth.size() * sizeof(T));
+    st.addMemory("winner_ids", p_.winner.size() * sizeof(uint32_t));
     st.addMemory("triangle_colors", colors_.size() * sizeof(Rgba8));
-    st.addMemory("nearest_depths", nearest_.size() * sizeof(double));
-    st.addMemory("blend_sums", sums_.size() * sizeof(UnderSum));
+    st.addMemory("nearest_depths", p_.nearest.size() * sizeof(double));
+    st.addMemory("blend_sums", p_.sums.size() * sizeof(UnderSum));
   }
 
-  // Every triangle's shaded colour, once (on the pool), for resolving: far fewer triangles than
-  // pixels, and a colour is the same all over its triangle.
+  // Every triangle's shaded colour, once, for resolving (triangleColors).
   void shadeTriangles(int threads) {
-    if (!color_ || R == WriteRule::Blend || R == WriteRule::DepthTestBlend || R == WriteRule::BlendUnder) return;
-    colors_.resize(tris_.size());
-    constexpr size_t kChunk = 4096;
-    parallelFor(0, (tris_.size() + kChunk - 1) / kChunk, threads, [&](size_t chunk) {
-      for (size_t i = chunk * kChunk; i < std::min(tris_.size(), (chunk + 1) * kChunk); ++i) colors_[i] = colorOf(tris_[i]);
-    });
+    if (p_.color && R::kColorAtResolve) colors_ = triangleColors(p_.tris, p_.shade, p_.derived, threads);
   }
 
   // Every fragment of triangle i inside pixels [x0, x1] x [y0, y1], through the rule.
   void draw(uint32_t i, DrawRaster raster, int x0, int y0, int x1, int y1, DrawCounters& counters) {
-    const SetupTriangle t = clippedTo(tris_[i], x0, y0, x1, y1);
+    const SetupTriangle t = clippedTo(p_.tris[i], x0, y0, x1, y1);
     if (t.minX > t.maxX || t.minY > t.maxY) return;
     const MappedPlanes m = mapPlanes<M>(t.depthNum, t.depthDen, cam_.near, cam_.far, cam_.orthographic);
     DrawCounters n;  // counted in registers, added once per triangle
@@ -112,99 +232,49 @@ class FragmentWriter {
     counters.add(n);
   }
 
-  // Face ids, exact eye depths and colours of rows [y0, y1) from the last fragment written to
-  // each pixel; depth only under the depth test: the eye depth of the stored value.
+  // Rows [y0, y1) resolved (resolvePixels): the colours drawn as the rule composited them, or each
+  // winner's; under BlendUnder, the background under everything drawn first.
   void resolveRows(int y0, int y1, DrawCounters& n) {
-    for (int y = y0; y < y1; ++y)
-      for (int x = 0; x < cam_.width; ++x) {
-        const size_t idx = frame_.index(x, y);
-        if constexpr (R == WriteRule::BlendUnder)  // the background under everything drawn
-          if (color_) frame_.color[idx] = sums_[idx].over(opt_.background);
-        if (!keepWinner_) {
-          if (depth_[idx] == clear_) continue;
-          frame_.depth[idx] = float(eyeDepthOfStored<S, M>(double(depth_[idx]), cam_.near, cam_.far, cam_.orthographic));
-        } else {
-          if (!winner_[idx]) continue;
-          resolveWinner(tris_[winner_[idx] - 1], x, y, idx, opt_.outputs, derived_, frame_);
-          // (Blend composited its colours as it drew; the others show the last written.)
-          if (color_ && R != WriteRule::Blend && R != WriteRule::DepthTestBlend && R != WriteRule::BlendUnder)
-            frame_.color[idx] = colors_[winner_[idx] - 1];
-        }
-        ++n.covered;
-      }
+    Frame& frame = p_.frame;
+    if constexpr (R::kRule == WriteRule::BlendUnder)
+      if (p_.color)
+        for (int y = y0; y < y1; ++y)
+          for (int x = 0; x < cam_.width; ++x) frame.color[frame.index(x, y)] = p_.sums[frame.index(x, y)].over(opt_.background);
+    const PixelRect rows{0, y0, cam_.width - 1, y1 - 1, size_t(cam_.width)};
+    const size_t offset = size_t(y0) * size_t(cam_.width);
+    const std::span<const T> depth = p_.depth.empty() ? std::span<const T>{} : std::span<const T>(p_.depth).subspan(offset);
+    const std::span<const uint32_t> winner =
+        p_.winner.empty() ? std::span<const uint32_t>{} : std::span<const uint32_t>(p_.winner).subspan(offset);
+    const bool colorAtResolve = p_.color && R::kColorAtResolve;
+    resolvePixels<S, M>(
+        rows, depth, clear_, winner, p_.tris, cam_, opt_.outputs, p_.derived,
+        [&](uint32_t w, size_t idx) {
+          if (colorAtResolve) frame.color[idx] = colors_[w];
+        },
+        frame, n);
   }
 
  private:
-  // One fragment of triangle i at pixel (x, y); `stored()` gives its depth value when the rule
-  // needs one.
+  // One fragment of triangle i at pixel (x, y) through the rule; `stored()` gives its depth value
+  // when the rule keeps depth.
   template <class Stored>
   void apply(uint32_t i, int x, int y, Stored&& stored, DrawCounters& n) {
-    const size_t idx = frame_.index(x, y);
-    if constexpr (kDepth) {
-      constexpr bool greater = M == DepthMapping::Reversed || M == DepthMapping::Inv;
-      const T z = stored();
-      ++n.depthTests;
-      if (!(greater ? z > depth_[idx] : z < depth_[idx])) return;  // strictly nearer: ties keep the first
-      if (R == WriteRule::DepthTest || colorOf(tris_[i]).a == 255) {
-        depth_[idx] = z;
-        ++n.depthWrites;
-      }
-    } else if constexpr (R == WriteRule::WhereUnwritten) {
-      if (winner_[idx]) return;
-      ++n.filled;
-    } else if constexpr (R == WriteRule::BlendUnder) {
-      if (color_ ? sums_[idx].through == 0 : winner_[idx] != 0) return;  // opaque: nothing behind shows
-    }
-    if constexpr (R == WriteRule::DepthTestBlend) {
-      // The ids show the nearest fragment drawn, transparent or not (transparent ones write no depth).
-      const double d = tris_[i].eyeDepth(x + 0.5, y + 0.5);
-      if (d < nearest_[idx]) {
-        nearest_[idx] = d;
-        winner_[idx] = i + 1;
-      }
-    } else if (R == WriteRule::BlendUnder) {
-      if (!winner_[idx]) winner_[idx] = i + 1;  // the first fragment is the nearest
-      if (!color_) ++n.filled;
-    } else if (keepWinner_) {
-      winner_[idx] = i + 1;
-    }
-    ++n.written;
-    if (color_) {
-      ++n.colorWrites;
-      if constexpr (R == WriteRule::Blend || R == WriteRule::DepthTestBlend)
-        frame_.color[idx] = over(colorOf(tris_[i]), frame_.color[idx]);
-      if constexpr (R == WriteRule::BlendUnder) {
-        sums_[idx].addUnder(colorOf(tris_[i]));
-        if (sums_[idx].through == 0) ++n.filled;
-      }
-    }
-    if (!frame_.writes.empty()) ++frame_.writes[idx];
+    const size_t idx = p_.frame.index(x, y);
+    T z{};
+    if constexpr (R::kDepth) z = stored();
+    if (R::write(p_, Fragment<T>{i, x, y, idx, z}, n)) countWritten(idx, p_.frame, n);
   }
 
-  // The shaded colour of a set-up triangle: its original face's, when it is derived geometry.
-  Rgba8 colorOf(const SetupTriangle& t) const {
-    return derived_ ? shade_(derived_->triangle[t.triangle]) : triangleColor(t, shade_);
-  }
-
-  std::span<const SetupTriangle> tris_;
   const Camera& cam_;
   const RenderOptions& opt_;
-  const TriangleShader& shade_;
-  Frame& frame_;
-  const DerivedScene* derived_;
-  const bool keepWinner_, color_;
   const T clear_;
-  std::vector<T>& depth_;  // DepthTest: the stored values
-  // Per pixel: 1 + the index of the last fragment's triangle, 0 = none.
-  std::vector<uint32_t>& winner_;
-  std::vector<Rgba8> colors_;     // per triangle: its colour (shadeTriangles)
-  std::vector<double> nearest_;   // DepthTestBlend: the eye depth of the winner's fragment
-  std::vector<UnderSum> sums_;    // BlendUnder: each pixel's blend so far
+  Pixels<S, M> p_;
+  std::vector<Rgba8> colors_;  // per triangle: its colour (shadeTriangles)
 };
 
 // The frame drawn and resolved by one writer: on one thread over the whole image, or binned,
 // tile by tile on the pool (each tile's pixels are its own; counters summed in tile order).
-template <WriteRule R, DepthStorage S, DepthMapping M>
+template <class R, DepthStorage S, DepthMapping M>
 void drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const Camera& cam, const RenderOptions& opt,
               const TriangleShader& shade, DrawBuffers& buffers, Frame& frame, DrawCounters& counters,
               const DerivedScene* derived) {
@@ -212,7 +282,7 @@ void drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const Came
   const int threads = resolveThreads(opt.threads);
   // The reverse painter's stops where every pixel is written: nothing more can show.
   auto full = [](const DrawCounters& n, uint64_t pixels) {
-    return (R == WriteRule::WhereUnwritten || R == WriteRule::BlendUnder) && n.filled == pixels;
+    return R::kStopsWhenFull && n.filled == pixels;
   };
   if (raster != DrawRaster::Binned) {
     const uint64_t pixels = uint64_t(cam.width) * uint64_t(cam.height);
@@ -252,6 +322,30 @@ void drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const Came
   frame.stats.addMemory("bins", binBytes(bins));
 }
 
+// The triangles drawn in their order under `rule` into the cleared frame, counted into
+// `counters`: one writer per rule and, for the depth rules, per depth format.
+void drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawRaster raster, const Camera& camera,
+                 const RenderOptions& options, const TriangleShader& shade, DrawBuffers& buffers, Frame& frame,
+                 DrawCounters& counters, const DerivedScene* derived) {
+  auto withRule = [&]<class R>() {
+    if constexpr (R::kDepth)
+      visitDepthFormat(options.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
+        drawWith<R, S, M>(triangles, raster, camera, options, shade, buffers, frame, counters, derived);
+      });
+    else  // no depth buffer: one instance
+      drawWith<R, DepthStorage::F32, DepthMapping::Reversed>(triangles, raster, camera, options, shade, buffers,
+                                                             frame, counters, derived);
+  };
+  switch (rule) {
+    case WriteRule::DepthTest: return withRule.template operator()<DepthTestRule>();
+    case WriteRule::Overwrite: return withRule.template operator()<OverwriteRule>();
+    case WriteRule::WhereUnwritten: return withRule.template operator()<WhereUnwrittenRule>();
+    case WriteRule::Blend: return withRule.template operator()<BlendRule>();
+    case WriteRule::DepthTestBlend: return withRule.template operator()<DepthTestBlendRule>();
+    case WriteRule::BlendUnder: return withRule.template operator()<BlendUnderRule>();
+  }
+}
+
 }  // namespace
 
 SetupTriangle clippedTo(const SetupTriangle& t, int x0, int y0, int x1, int y1) {
@@ -276,18 +370,21 @@ std::vector<std::vector<uint32_t>> binByCell(std::span<const SetupTriangle> tria
   return bins;
 }
 
+std::vector<Rgba8> triangleColors(std::span<const SetupTriangle> tris, const TriangleShader& shade,
+                                  const DerivedScene* derived, int threads) {
+  std::vector<Rgba8> colors(tris.size());
+  constexpr size_t kChunk = 4096;
+  parallelFor(0, (tris.size() + kChunk - 1) / kChunk, threads, [&](size_t chunk) {
+    for (size_t i = chunk * kChunk; i < std::min(tris.size(), (chunk + 1) * kChunk); ++i)
+      colors[i] = colorOf(tris[i], shade, derived);
+  });
+  return colors;
+}
+
 uint64_t binBytes(const std::vector<std::vector<uint32_t>>& bins) {
   uint64_t bytes = bins.capacity() * sizeof(bins[0]);
   for (const auto& b : bins) bytes += b.capacity() * sizeof(uint32_t);
   return bytes;
-}
-
-std::vector<SetupTriangle> frontEndStep(const Scene& scene, const Camera& camera, const RenderOptions& options,
-                                        FrontEndOutput& fe, Timer& timer, Stats& st) {
-  runFrontEnd(scene, camera, options, fe);
-  std::vector<SetupTriangle> triangles = fe.flatten();
-  st.addTime("frontend", timer.lap());
-  return triangles;
 }
 
 void recordDrawStats(Stats& st, const FrontEndCounters& fe, uint64_t frontEndBytes, size_t setupTriangles,
@@ -338,51 +435,57 @@ DrawRaster drawRasterOf(const AlgorithmParams& params) {
   return name == "scanline" ? DrawRaster::Scanline : name == "binned" ? DrawRaster::Binned : DrawRaster::HalfSpace;
 }
 
-void drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawRaster raster, const Camera& camera,
-                 const RenderOptions& options, const TriangleShader& shade, DrawBuffers& buffers, Frame& frame,
-                 DrawCounters& counters, const DerivedScene* derived) {
-  frame.clear(options.background, resolveThreads(options.threads));
-  auto withRule = [&]<WriteRule R>() {
-    if constexpr (R == WriteRule::DepthTest || R == WriteRule::DepthTestBlend)
-      visitDepthFormat(options.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
-        drawWith<R, S, M>(triangles, raster, camera, options, shade, buffers, frame, counters, derived);
-      });
-    else  // no depth buffer: one instance
-      drawWith<R, DepthStorage::F32, DepthMapping::Reversed>(triangles, raster, camera, options, shade, buffers,
-                                                             frame, counters, derived);
-  };
-  switch (rule) {
-    case WriteRule::DepthTest: return withRule.template operator()<WriteRule::DepthTest>();
-    case WriteRule::Overwrite: return withRule.template operator()<WriteRule::Overwrite>();
-    case WriteRule::WhereUnwritten: return withRule.template operator()<WriteRule::WhereUnwritten>();
-    case WriteRule::Blend: return withRule.template operator()<WriteRule::Blend>();
-    case WriteRule::DepthTestBlend: return withRule.template operator()<WriteRule::DepthTestBlend>();
-    case WriteRule::BlendUnder: return withRule.template operator()<WriteRule::BlendUnder>();
+void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, const FrameSteps& steps,
+               const DrawStep& draw, Frame& frame) {
+  Timer timer;
+  Stats& st = frame.stats;
+  const TriangleShader shade(scene, camera, options.shading);  // (the original scene's faces)
+  FrameWork work;
+  if (steps.setUp) {
+    FrontEndOutput fe;
+    runFrontEnd(steps.derived ? *steps.derived->scene : scene, camera, options, fe);
+    work.triangles = fe.flatten();
+    work.frontEnd = fe;
+    work.frontEndBytes = fe.memoryBytes();
+    st.addTime("frontend", timer.lap());
   }
+  if (steps.order) {
+    steps.order(work.triangles);
+    st.addTime("order", timer.lap());
+  }
+  if (steps.clearFrame) {
+    frame.clear(options.background, resolveThreads(options.threads));
+    st.addTime("clear", timer.lap());
+  }
+  auto timed = [&] {
+    double ms = 0;
+    for (const auto& [stage, t] : st.time_ms) ms += t;
+    return ms;
+  };
+  const double before = timed();
+  draw(work, shade);
+  const double elapsed = timer.lap(), ownStages = timed() - before;
+  st.addTime("raster", std::max(0.0, elapsed - ownStages));
+  recordDrawStats(st, work.frontEnd, work.frontEndBytes, work.triangles.capacity(), work.counters,
+                  steps.depthTested ? &options.depthFormat : nullptr, frame);
 }
 
 void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& options, WriteRule rule,
                DrawRaster raster, const OrderFn& order, DrawBuffers& buffers, Frame& frame,
                const DerivedScene* derived) {
-  Timer timer;
-  Stats& st = frame.stats;
-  const TriangleShader shade(scene, camera, options.shading);  // (the original scene's faces)
-  FrontEndOutput fe;
-  std::vector<SetupTriangle> triangles = frontEndStep(derived ? *derived->scene : scene, camera, options, fe, timer, st);
-  if (order) {
-    order(triangles);
-    st.addTime("order", timer.lap());
-  }
-  DrawCounters n;
-  drawOrdered(triangles, rule, raster, camera, options, shade, buffers, frame, n, derived);
-  st.addTime("raster", timer.lap());
-
   const bool depthTested = rule == WriteRule::DepthTest || rule == WriteRule::DepthTestBlend;
-  recordDrawStats(st, fe, fe.memoryBytes(), triangles.capacity(), n, depthTested ? &options.depthFormat : nullptr,
-                  frame);
+  uint64_t skippedFull = 0;
+  drawFrame(scene, camera, options, {.order = order, .depthTested = depthTested, .derived = derived},
+            [&](FrameWork& work, const TriangleShader& shade) {
+              drawOrdered(work.triangles, rule, raster, camera, options, shade, buffers, frame, work.counters,
+                          derived);
+              skippedFull = work.counters.skippedFull;
+            },
+            frame);
+  Stats& st = frame.stats;
   st.setDetail("rasterizer", drawRasterName(raster));
   st.setDetail("write_rule", writeRuleName(rule));
-  if (rule == WriteRule::WhereUnwritten || rule == WriteRule::BlendUnder) st.setDetail("skipped_full", n.skippedFull);
+  if (rule == WriteRule::WhereUnwritten || rule == WriteRule::BlendUnder) st.setDetail("skipped_full", skippedFull);
 }
 
 }  // namespace hsr::algo

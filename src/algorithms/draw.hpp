@@ -14,7 +14,10 @@
 #include <vector>
 
 #include "core/timer.hpp"
+#include "core/depth_map.hpp"
+#include "core/shading.hpp"
 #include "frontend/frontend.hpp"
+#include "setup/fragment_depth.hpp"
 
 namespace hsr::algo {
 
@@ -95,7 +98,38 @@ struct DerivedScene {
   std::vector<uint32_t> triangle;        // per triangle of `scene`: a triangle of the original face
 };
 
+/// Puts the set-up triangles (submission order on entry) into drawing order.
+using OrderFn = std::function<void(std::vector<SetupTriangle>& triangles)>;
+
 // ---- The z-buffer core: the pieces every way of drawing shares (draw.cpp) ----
+
+/// The depth test, one copy for every z-buffer: counts the test and says whether stored value z
+/// is strictly nearer (mapping M) than the pixel's `stored` (a tie keeps what was drawn first).
+template <DepthMapping M, class T>
+inline bool passesDepthTest(T z, T stored, DrawCounters& n) {
+  ++n.depthTests;
+  return storedNearer<M>(double(z), double(stored));
+}
+/// Stores z as the pixel's depth and counts the write.
+template <class T>
+inline void storeDepth(T z, T& stored, DrawCounters& n) {
+  stored = z;
+  ++n.depthWrites;
+}
+/// The z-buffer's step for one fragment: the test, and the store where it passes.
+template <DepthMapping M, class T>
+inline bool depthTest(T z, T& stored, DrawCounters& n) {
+  if (!passesDepthTest<M>(z, stored, n)) return false;
+  storeDepth(z, stored, n);
+  return true;
+}
+/// A fragment that wrote the frame's pixel idx, counted one way for every rule: a write, a colour
+/// write when the frame keeps colour, and the pixel's count in Frame::writes when sized.
+inline void countWritten(size_t idx, Frame& frame, DrawCounters& n) {
+  ++n.written;
+  if (!frame.color.empty()) ++n.colorWrites;
+  if (!frame.writes.empty()) ++frame.writes[idx];
+}
 
 /// A copy of t that covers only the pixels of [x0, x1] x [y0, y1] (an empty box when none).
 SetupTriangle clippedTo(const SetupTriangle& t, int x0, int y0, int x1, int y1);
@@ -119,10 +153,80 @@ inline void resolveWinner(const SetupTriangle& t, int x, int y, size_t idx, Fram
   frame.depth[idx] = float(t.eyeDepth(x + 0.5, y + 0.5));
 }
 
-/// A frame's first step, the same for every drawing: the front end over `scene`, its set-up
-/// triangles flattened in submission order, timed on `timer` as the stage "frontend".
-std::vector<SetupTriangle> frontEndStep(const Scene& scene, const Camera& camera, const RenderOptions& options,
-                                        FrontEndOutput& fe, Timer& timer, Stats& st);
+/// The shaded colour of set-up triangle t: its original face's, when it is derived geometry.
+inline Rgba8 colorOf(const SetupTriangle& t, const TriangleShader& shade, const DerivedScene* derived) {
+  return derived ? shade(derived->triangle[t.triangle]) : triangleColor(t, shade);
+}
+/// Every triangle's shaded colour, once (on `threads` of the pool), for resolving: far fewer
+/// triangles than pixels, and a colour is the same all over its triangle.
+std::vector<Rgba8> triangleColors(std::span<const SetupTriangle> tris, const TriangleShader& shade,
+                                  const DerivedScene* derived, int threads);
+
+/// The pixels [x0, x1] x [y0, y1] of a frame and where a buffer covering them (row length
+/// `stride`, starting at (x0, y0)) holds each: the whole image, a row of it, or one region.
+struct PixelRect {
+  int x0 = 0, y0 = 0, x1 = -1, y1 = -1;
+  size_t stride = 0;
+  size_t at(int x, int y) const { return size_t(y - y0) * stride + size_t(x - x0); }
+};
+
+/// The resolve, one copy for every z-buffer: each pixel of `rect` from its per-pixel state — with
+/// winners (1 + the index into `tris` of the last triangle written, 0 = none), its ids and exact
+/// eye depth from that triangle (resolveWinner) and `color(winner index, frame index)` for the
+/// colour; without (depth only), the eye depth of its stored value, `clear` = none. Counts the
+/// pixels covered.
+template <DepthStorage S, DepthMapping M, class Color>
+void resolvePixels(const PixelRect& rect, std::span<const DepthT<S>> depth, DepthT<S> clear,
+                   std::span<const uint32_t> winner, std::span<const SetupTriangle> tris, const Camera& camera,
+                   FrameOutputs outputs, const DerivedScene* derived, Color&& color, Frame& frame,
+                   DrawCounters& n) {
+  for (int y = rect.y0; y <= rect.y1; ++y)
+    for (int x = rect.x0; x <= rect.x1; ++x) {
+      const size_t at = rect.at(x, y), idx = frame.index(x, y);
+      if (winner.empty()) {
+        if (depth[at] == clear) continue;
+        frame.depth[idx] =
+            float(eyeDepthOfStored<S, M>(double(depth[at]), camera.near, camera.far, camera.orthographic));
+      } else {
+        if (!winner[at]) continue;
+        resolveWinner(tris[winner[at] - 1], x, y, idx, outputs, derived, frame);
+        color(winner[at] - 1, idx);
+      }
+      ++n.covered;
+    }
+}
+
+/// What the steps of one frame share: the set-up triangles (in drawing order once ordered), the
+/// front end's counts and memory, and the counters.
+struct FrameWork {
+  std::vector<SetupTriangle> triangles;
+  FrontEndCounters frontEnd;
+  uint64_t frontEndBytes = 0;
+  DrawCounters counters;
+};
+
+/// Where an algorithm's frame departs from the common one (drawFrame).
+struct FrameSteps {
+  OrderFn order;                          // the drawing order; none: submission order
+  bool depthTested = true;                // the statistics name the depth format
+  bool clearFrame = true;                 // false: the draw step writes every pixel itself
+  bool setUp = true;                      // false: the draw step sets up the triangles itself and fills
+                                          // the work's front-end counts (occlusion culling interleaves them)
+  const DerivedScene* derived = nullptr;  // draw its scene's triangles (DerivedScene)
+};
+
+/// A frame's drawing step: draws `work.triangles` into the frame and resolves them, counting into
+/// `work.counters`, adding its buffers to the frame's memory and timing its own stages if it
+/// likes (what it does not time is "raster").
+using DrawStep = std::function<void(FrameWork& work, const TriangleShader& shade)>;
+
+/// One frame, in the same steps for every drawing algorithm: the front end sets up the scene's
+/// triangles (or, with `derived`, its scene's) in submission order ("frontend"); `order`
+/// reorders them ("order"); the frame is cleared ("clear"); `draw` draws and resolves them
+/// ("raster", less the stages it timed itself); the statistics common to all are filled
+/// (recordDrawStats).
+void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, const FrameSteps& steps,
+               const DrawStep& draw, Frame& frame);
 
 /// The statistics every drawing fills, one way for all: the front end's counts, the counters,
 /// the memory of the set-up triangles, the front end's and the frame's (the caller adds its own
@@ -130,21 +234,9 @@ std::vector<SetupTriangle> frontEndStep(const Scene& scene, const Camera& camera
 void recordDrawStats(Stats& st, const FrontEndCounters& fe, uint64_t frontEndBytes, size_t setupTriangles,
                      const DrawCounters& n, const DepthFormat* depthFormat, const Frame& frame);
 
-/// Draws `triangles` in their order into `frame` (sized by render(); cleared here) under `rule`
-/// and adds to `counters`; Frame::writes, when sized, gets each pixel's written fragments. With
-/// `derived`, the triangles are its scene's, and ids and colours are mapped back (DerivedScene).
-/// Adds the buffers it used to frame.stats.memory.
-void drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawRaster raster, const Camera& camera,
-                 const RenderOptions& options, const TriangleShader& shade, DrawBuffers& buffers, Frame& frame,
-                 DrawCounters& counters, const DerivedScene* derived = nullptr);
-
-/// Puts the set-up triangles (submission order on entry) into drawing order.
-using OrderFn = std::function<void(std::vector<SetupTriangle>& triangles)>;
-
-/// A whole frame: the front end sets up the scene's triangles (or, with `derived`, its scene's)
-/// in submission order, `order` (if any) reorders them, drawOrdered draws them; the statistics
-/// common to every algorithm are filled (front-end counts, counters, memory, times "frontend",
-/// "order", "raster"), and the details "rasterizer" and "write_rule".
+/// A frame through the drawing service: drawFrame whose draw step draws the triangles in their
+/// order under `rule` on `raster` (each pixel's written fragments in Frame::writes, when sized),
+/// with the details "rasterizer" and "write_rule".
 void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& options, WriteRule rule,
                DrawRaster raster, const OrderFn& order, DrawBuffers& buffers, Frame& frame,
                const DerivedScene* derived = nullptr);

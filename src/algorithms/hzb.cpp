@@ -375,54 +375,44 @@ struct PyramidUse {
 
 // A frame of the hierarchical z-buffer (use.testTriangles) or of the textbook z-buffer on its
 // pyramid (occlusion culling only), with or without occlusion culling.
-void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, PyramidUse use,
-               Frame& frame) {
-  const bool frontToBack = use.frontToBack, testTriangles = use.testTriangles, cull = use.cull;
-  Timer timer;
+void pyramidFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, PyramidUse use,
+                  Frame& frame) {
   Stats& st = frame.stats;
-  const TriangleShader shade(scene, camera, options.shading);
-  frame.clear(options.background, resolveThreads(options.threads));
-  std::vector<SetupTriangle> triangles;
-  DrawCounters n;
-  visitDepthFormat(options.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
-    HierarchicalZBuffer<S, M> hz(triangles, camera, options, frame, testTriangles);
-    st.addTime("clear", timer.lap());
-    FrontEndCounters counters;
-    uint64_t frontEndBytes = 0;
-    if (cull) {
-      const ObjectCounts c = drawByObjects(scene, camera, options, frontToBack, hz, triangles, counters, frontEndBytes, n);
-      st.addTime("frontend+raster", timer.lap());
-      st.culled_occlusion = c.trianglesCulled;
-      st.setDetail("objects", c.objects);
-      st.setDetail("objects_culled", c.objectsCulled);
-      st.setDetail("triangles_culled", c.trianglesCulled);
-      st.setDetail("batches", c.batches);
-    } else {
-      FrontEndOutput fe;
-      triangles = frontEndStep(scene, camera, options, fe, timer, st);
-      counters = fe;
-      frontEndBytes = fe.memoryBytes();
-      if (frontToBack) {
-        byFaceRank(faceRanks(faceKeys(scene, camera, SortKey::Min), /*backToFront=*/false))(triangles);
-        st.addTime("order", timer.lap());
+  FrameSteps steps;
+  steps.setUp = !use.cull;  // occlusion culling sets triangles up batch by batch, between draws
+  if (!use.cull && use.frontToBack)
+    steps.order = byFaceRank(faceRanks(faceKeys(scene, camera, SortKey::Min), /*backToFront=*/false));
+  drawFrame(scene, camera, options, steps, [&](FrameWork& work, const TriangleShader& shade) {
+    DrawCounters& n = work.counters;
+    visitDepthFormat(options.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
+      HierarchicalZBuffer<S, M> hz(work.triangles, camera, options, frame, use.testTriangles);
+      if (use.cull) {
+        Timer timer;
+        const ObjectCounts c = drawByObjects(scene, camera, options, use.frontToBack, hz, work.triangles,
+                                             work.frontEnd, work.frontEndBytes, n);
+        st.addTime("frontend+raster", timer.lap());
+        st.culled_occlusion = c.trianglesCulled;
+        st.setDetail("objects", c.objects);
+        st.setDetail("objects_culled", c.objectsCulled);
+        st.setDetail("triangles_culled", c.trianglesCulled);
+        st.setDetail("batches", c.batches);
+      } else {
+        hz.drawFrom(0, n);
       }
-      hz.drawFrom(0, n);
-    }
-    hz.resolve(shade, n);
-    st.addTime("raster", timer.lap());
-    recordDrawStats(st, counters, frontEndBytes, triangles.capacity(), n, &options.depthFormat, frame);
-    hz.addMemory(st);
-    if (!testTriangles) return;
-    st.setDetail("levels", uint64_t(hz.levels()));
-    st.setDetail("triangles_drawn", uint64_t(triangles.size()));
-    st.setDetail("triangles_rejected", hz.trianglesRejected());
-    for (int k = 0; k < hz.levels(); ++k) {
-      const LevelCounts& c = hz.counts()[size_t(k)];
-      st.setDetail(levelKey(k, 0), c.tested);
-      st.setDetail(levelKey(k, 1), c.rejected);
-      st.setDetail(levelKey(k, 2), c.descended);
-    }
-  });
+      hz.resolve(shade, n);
+      hz.addMemory(st);
+      if (!use.testTriangles) return;
+      st.setDetail("levels", uint64_t(hz.levels()));
+      st.setDetail("triangles_drawn", uint64_t(work.triangles.size()));
+      st.setDetail("triangles_rejected", hz.trianglesRejected());
+      for (int k = 0; k < hz.levels(); ++k) {
+        const LevelCounts& c = hz.counts()[size_t(k)];
+        st.setDetail(levelKey(k, 0), c.tested);
+        st.setDetail(levelKey(k, 1), c.rejected);
+        st.setDetail(levelKey(k, 2), c.descended);
+      }
+    });
+  }, frame);
 }
 
 // The pyramid is rebuilt over each frame's depth buffer: the object keeps nothing between views.
@@ -430,8 +420,8 @@ class Hzb final : public SceneAlgorithm {
  public:
   using SceneAlgorithm::SceneAlgorithm;
   void render(const Camera& camera, const RenderOptions& options, Frame& frame) override {
-    drawFrame(scene_, camera, options,
-              {.frontToBack = params_.text("order") == "front-to-back",
+    pyramidFrame(scene_, camera, options,
+                 {.frontToBack = params_.text("order") == "front-to-back",
                .testTriangles = true,
                .cull = params_.flag("occlusion-cull")},
               frame);
@@ -443,7 +433,7 @@ class Hzb final : public SceneAlgorithm {
 }  // namespace
 
 void zbufferOcclusionCulled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame) {
-  drawFrame(scene, camera, options, {.frontToBack = false, .testTriangles = false, .cull = true}, frame);
+  pyramidFrame(scene, camera, options, {.frontToBack = false, .testTriangles = false, .cull = true}, frame);
 }
 
 AlgorithmInfo hzbAlgorithm() {

@@ -244,31 +244,26 @@ class MidpointZBuffer {
 
 void midpoint(const Scene& scene, const Camera& camera, const RenderOptions& options, const AlgorithmParams& params,
               Frame& frame) {
-  Timer timer;
   Stats& st = frame.stats;
-  const TriangleShader shade(scene, camera, options.shading);
-  FrontEndOutput fe;
-  const std::vector<SetupTriangle> triangles = frontEndStep(scene, camera, options, fe, timer, st);
-  frame.clear(options.background, resolveThreads(options.threads));
-  DrawCounters n;
-  visitDepthFormat(options.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
-    MidpointZBuffer<S, M> mz(triangles, camera, options, frame, int(params.integer("initial-splits")),
-                             int(params.integer("max-depth")));
-    mz.drawAll(n);
-    mz.resolve(shade, n);
-    st.addTime("raster", timer.lap());
-    const MidpointCounts& c = mz.counts();
-    n.depthTests = c.pointComparisons + c.pixelTests;  // the paper's z comparisons
-    recordDrawStats(st, fe, fe.memoryBytes(), triangles.capacity(), n, &options.depthFormat, frame);
-    mz.addMemory(st);
-    st.setDetail("point_comparisons", c.pointComparisons);
-    st.setDetail("pixel_tests", c.pixelTests);
-    st.setDetail("parts_tested", c.parts);
-    st.setDetail("parts_invisible", c.invisible);
-    st.setDetail("parts_drawn_untested", c.drawnUntested);
-    st.setDetail("parts_split", c.split);
-    st.setDetail("parts_per_pixel", c.perPixel);
-  });
+  drawFrame(scene, camera, options, {}, [&](FrameWork& work, const TriangleShader& shade) {
+    DrawCounters& n = work.counters;
+    visitDepthFormat(options.depthFormat, [&]<DepthStorage S, DepthMapping M>() {
+      MidpointZBuffer<S, M> mz(work.triangles, camera, options, frame, int(params.integer("initial-splits")),
+                               int(params.integer("max-depth")));
+      mz.drawAll(n);
+      mz.resolve(shade, n);
+      const MidpointCounts& c = mz.counts();
+      n.depthTests = c.pointComparisons + c.pixelTests;  // the paper's z comparisons
+      mz.addMemory(st);
+      st.setDetail("point_comparisons", c.pointComparisons);
+      st.setDetail("pixel_tests", c.pixelTests);
+      st.setDetail("parts_tested", c.parts);
+      st.setDetail("parts_invisible", c.invisible);
+      st.setDetail("parts_drawn_untested", c.drawnUntested);
+      st.setDetail("parts_split", c.split);
+      st.setDetail("parts_per_pixel", c.perPixel);
+    });
+  }, frame);
 }
 
 // Each frame subdivides anew: the object keeps nothing between views.

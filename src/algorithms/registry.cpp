@@ -12,6 +12,10 @@
 // `AlgorithmInfo name##Algorithm()`, defined in the algorithm's own file.
 #define HSR_ALGORITHMS(X) \
   X(zbuffer)              \
+  X(zbufferSliced)        \
+  X(zbufferRegions)       \
+  X(zbufferHalfRange)     \
+  X(zbufferCulled)        \
   X(raycast)              \
   X(painter)              \
   X(reversePainter)       \

@@ -29,7 +29,7 @@ class ZBufferPixels {
         depth_(size_t(camera.width) * size_t(camera.height), clear_),
         winner_(options.outputs != FrameOutputs::DepthOnly ? depth_.size() : 0, 0) {}
 
-  /// "a is strictly nearer than b" in stored values: the depth test.
+  /// "a is strictly nearer than b" in stored values (the depth test's comparison, uncounted).
   static bool nearer(T a, T b) { return storedNearer<M>(double(a), double(b)); }
   /// The nearer / farther of two stored values.
   static T nearest(T a, T b) { return nearer(a, b) ? a : b; }
@@ -48,42 +48,30 @@ class ZBufferPixels {
     return T(fragmentStored<S>(m, x + 0.5, m.p.b * (y + 0.5), m.q.b * (y + 0.5)));
   }
 
-  /// The depth test of triangle i's fragment z at pixel idx: written when strictly nearer.
+  /// The depth test of triangle i's fragment z at pixel idx (draw.hpp's depthTest): written when
+  /// strictly nearer.
   bool test(size_t idx, T z, uint32_t i, DrawCounters& n) {
-    ++n.depthTests;
-    if (!nearer(z, depth_[idx])) return false;
-    write(idx, z, i, n);
+    if (!depthTest<M>(z, depth_[idx], n)) return false;
+    claim(idx, i, n);
     return true;
   }
   /// Triangle i's fragment z written at pixel idx without a test.
   void write(size_t idx, T z, uint32_t i, DrawCounters& n) {
-    depth_[idx] = z;
-    ++n.depthWrites;
-    ++n.written;
-    if (!winner_.empty()) winner_[idx] = i + 1;
-    if (!frame_.color.empty()) ++n.colorWrites;
-    if (!frame_.writes.empty()) ++frame_.writes[idx];
+    storeDepth(z, depth_[idx], n);
+    claim(idx, i, n);
   }
 
   /// Face ids, eye depths and colours of every pixel from the last fragment written (depth only:
-  /// the eye depth of the stored value), as the drawing service resolves; counts covered pixels.
+  /// the eye depth of the stored value): the drawing service's resolve (resolvePixels).
   void resolve(std::span<const SetupTriangle> tris, const TriangleShader& shade, DrawCounters& n) {
     const bool color = has(options_.outputs, FrameOutputs::Color);
-    for (int y = 0; y < camera_.height; ++y)
-      for (int x = 0; x < camera_.width; ++x) {
-        const size_t idx = frame_.index(x, y);
-        if (winner_.empty()) {
-          if (depth_[idx] == clear_) continue;
-          frame_.depth[idx] =
-              float(eyeDepthOfStored<S, M>(double(depth_[idx]), camera_.near, camera_.far, camera_.orthographic));
-        } else {
-          if (!winner_[idx]) continue;
-          const SetupTriangle& t = tris[winner_[idx] - 1];
-          resolveWinner(t, x, y, idx, options_.outputs, nullptr, frame_);
-          if (color) frame_.color[idx] = triangleColor(t, shade);
-        }
-        ++n.covered;
-      }
+    const PixelRect image{0, 0, camera_.width - 1, camera_.height - 1, size_t(camera_.width)};
+    resolvePixels<S, M>(
+        image, std::span<const T>(depth_), clear_, winner_, tris, camera_, options_.outputs, nullptr,
+        [&](uint32_t w, size_t idx) {
+          if (color) frame_.color[idx] = triangleColor(tris[w], shade);
+        },
+        frame_, n);
   }
 
   void addMemory(Stats& st) const {
@@ -92,6 +80,12 @@ class ZBufferPixels {
   }
 
  private:
+  // The fragment of triangle i that wrote pixel idx: the winner, counted.
+  void claim(size_t idx, uint32_t i, DrawCounters& n) {
+    if (!winner_.empty()) winner_[idx] = i + 1;
+    countWritten(idx, frame_, n);
+  }
+
   const Camera& camera_;
   const RenderOptions& options_;
   Frame& frame_;

@@ -1,0 +1,34 @@
+// The textbook z-buffer with occlusion culling: the scene's meshes drawn in batches nearest
+// first, each mesh's screen box and nearest depth tested against a z-pyramid kept over the depth
+// buffer before any of its triangles is set up; the triangles left drawn by the textbook loop (a
+// depth test per fragment, the scalar half-space rasterizer). The object loop and the pyramid are
+// the hierarchical z-buffer's (hzb.cpp), without its test per triangle.
+#include "algorithms/algorithms.hpp"
+
+namespace hsr::algo {
+namespace {
+
+// The pyramid is rebuilt over each frame's depth buffer: the object keeps nothing between views.
+class ZbufferCulled final : public SceneAlgorithm {
+ public:
+  using SceneAlgorithm::SceneAlgorithm;
+  void render(const Camera& camera, const RenderOptions& options, Frame& frame) override {
+    zbufferOcclusionCulled(scene_, camera, options, frame);
+  }
+};
+
+}  // namespace
+
+AlgorithmInfo zbufferCulledAlgorithm() {
+  AlgorithmInfo a;
+  a.name = "zbuffer-culled";
+  a.summary = "the textbook z-buffer with occlusion culling: meshes hidden behind what is drawn are dropped whole "
+              "before set-up";
+  a.source = "Ukrainian paper (occlusion culling on the hierarchical z-buffer's pyramid)";
+  a.guarantee.kind = Guarantee::Kind::Exact;
+  a.guarantee.condition = "up to the depth format's precision: z-fighting is counted as ambiguous";
+  a.create = factoryOf<ZbufferCulled>();
+  return a;
+}
+
+}  // namespace hsr::algo
