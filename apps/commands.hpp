@@ -2,6 +2,8 @@
 // declares its flags on its CLI11 app and returns the runner that does the work once parsing
 // succeeded; and the small helpers several of them share.
 #pragma once
+#include <hsr/common.hpp>
+
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -42,6 +44,10 @@ inline double median(std::vector<double> values) {
   const size_t n = values.size();
   return n == 0 ? 0 : n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
+
+/// An InputError in the command line's terms: a keyed error names its setting by the flag that
+/// sets it ("--size 0x5: ...", "... (--max-memory)"); a plain one is its what() (flags.cpp).
+std::string cliMessage(const hsr::InputError& error);
 
 /// The CPU's model name (Linux /proc/cpuinfo; "unknown" elsewhere), for benchmark records.
 std::string cpuModel();

@@ -1,6 +1,7 @@
 // The flags `hsr render` and `hsr bench` share (flags.hpp) and the parsers of flag values: each
 // parser throws InputError "--flag 'text': problem" (exit status 2). Called by the subcommands'
-// setup functions (declare) and runners (prepare).
+// setup functions (declare) and runners (prepare). Also cliMessage (commands.hpp): the library's
+// keyed errors worded with the flags that set what they are about.
 #include "flags.hpp"
 
 #include "commands.hpp"
@@ -190,6 +191,25 @@ void ViewFlags::declare(CLI::App& cmd) {
                   ->type_name("HEIGHT")
                   ->check(kPositive)
                   ->group(group);
+}
+
+std::string cliMessage(const hsr::InputError& error) {
+  const char* flag = "";
+  switch (error.setting()) {
+    case hsr::Setting::None: return error.what();
+    case hsr::Setting::Algorithm: flag = "--algorithm"; break;
+    case hsr::Setting::Param: flag = "--param"; break;
+    case hsr::Setting::Size: flag = "--size"; break;
+    case hsr::Setting::DepthFormat: flag = "--depth-format"; break;
+    case hsr::Setting::Verify: flag = "--verify"; break;
+    case hsr::Setting::SwitchOff: flag = "--switch-off"; break;
+    case hsr::Setting::Svg: flag = "--svg"; break;
+    case hsr::Setting::OverdrawImage: flag = "--overdraw-image"; break;
+    case hsr::Setting::ShadowMapSize: flag = "--shadow-map-size"; break;
+    case hsr::Setting::ShadowBias: flag = "--shadow-bias"; break;
+    case hsr::Setting::MaxMemory: flag = "--max-memory"; break;
+  }
+  return error.worded(flag);
 }
 
 hsr::FrameOutputs ViewFlags::frameOutputs() const {

@@ -93,7 +93,7 @@ int runCli(int argc, char** argv) {
     throw InputError(std::string(e.what()) + " (see '" + topic + "')");
   }
   if (std::any_of(maxMemoryFlags.begin(), maxMemoryFlags.end(), [](CLI::Option* o) { return o->count() > 0; }))
-    hsr::setMemoryLimit(hsr::parseMemorySize(maxMemory));
+    hsr::setMemoryLimit(hsr::parseMemorySize(maxMemory, "--max-memory"));
   return runners.at(app.get_subcommands().front())();  // require_subcommand(1): exactly one
 }
 
@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
   try {
     return hsr::cli::runCli(argc, argv);
   } catch (const hsr::InputError& e) {
-    return hsr::cli::fail(2, e.what());
+    return hsr::cli::fail(2, hsr::cli::cliMessage(e));
   } catch (const std::bad_alloc&) {
     return hsr::cli::fail(1, "error: out of memory");
   } catch (const std::exception& e) {

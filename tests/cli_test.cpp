@@ -549,9 +549,33 @@ TEST_F(CommandLine, MaxMemoryRefusesAHugeImageUpFront) {
   Result r = hsr("render builtin:cubes --size 16384x16384 --max-memory 256M -o big.png");
   EXPECT_EQ(r.status, 2) << r;
   EXPECT_TRUE(r.oneErrorLine()) << r;
-  EXPECT_NE(r.err.find("--size 16384x16384"), std::string::npos) << r;
+  EXPECT_NE(r.err.find("a 16384x16384 image with"), std::string::npos) << r;
   EXPECT_NE(r.err.find("memory limit of 256 MiB (--max-memory)"), std::string::npos) << r;
   EXPECT_FALSE(fs::exists(file("big.png")));
+}
+
+// The library's errors name the setting, not a flag; the command line words them with its flags.
+TEST_F(CommandLine, LibraryErrorsAreWordedWithTheFlags) {
+  // The one error line of a command that must fail with exit status 2.
+  auto refusal = [&](const std::string& args) {
+    Result r = hsr(args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r;
+    EXPECT_TRUE(r.oneErrorLine()) << r;
+    return r.err;
+  };
+  auto startsWith = [](const std::string& text, const std::string& start) { return text.rfind(start, 0) == 0; };
+  const std::string render = "render builtin:cubes --size 32x24 -o x.png ";
+  std::string err = refusal(render + "--depth-format u17");
+  EXPECT_EQ(err, "hsr: --depth-format: unknown storage 'u17' (u16, u24, u32, f32)\n");
+  err = refusal(render + "--shadows --shadow-map-size 8");
+  EXPECT_TRUE(startsWith(err, "hsr: --shadow-map-size 8: must be 16 to ")) << err;
+  err = refusal(render + "--param raster=fast");
+  EXPECT_TRUE(startsWith(err, "hsr: --param raster=fast: not a value of zbuffer's raster (one of ")) << err;
+  // Also when a scene file names the built-in scene: the error keeps its key.
+  writeFile("big.json", R"({"meshes": [{"builtin": "random?n=50000000"}]})");
+  err = refusal("info big.json --max-memory 1G");
+  EXPECT_TRUE(startsWith(err, "hsr: big.json: meshes[0].builtin: builtin:random?n=50000000 needs about ")) << err;
+  EXPECT_NE(err.find(" MiB, more than the memory limit of 1024 MiB (--max-memory)"), std::string::npos) << err;
 }
 
 TEST_F(CommandLine, MaxMemoryRefusesAnAbsurdBuiltinScene) {

@@ -19,13 +19,14 @@ struct LimitGuard {
 
 constexpr uint64_t kMiB = uint64_t(1) << 20;
 
-std::string refusal(const std::function<void()>& f) {
+// What `f` throws: its InputError, or an empty plain one when it throws none.
+InputError refusal(const std::function<void()>& f) {
   try {
     f();
   } catch (const InputError& e) {
-    return e.what();
+    return e;
   }
-  return "";
+  return InputError("");
 }
 
 TEST(MemoryLimit, DefaultsToTheMachinesAvailableMemory) {
@@ -49,13 +50,13 @@ TEST(MemoryLimit, ParsesSizes) {
 
 TEST(MemoryLimit, RefusesABuiltinSceneBeforeGeneratingIt) {
   LimitGuard limit(64 * kMiB);
-  const std::string why = refusal([] { loadScene("builtin:random?n=5000000"); });
+  const std::string why = refusal([] { loadScene("builtin:random?n=5000000"); }).what();
   EXPECT_NE(why.find("builtin:random?n=5000000 needs about 611 MiB, more than the memory limit of 64 MiB"),
             std::string::npos)
       << why;
-  EXPECT_NE(refusal([] { loadScene("builtin:city?blocks=1000"); }).find("--max-memory"), std::string::npos);
-  EXPECT_NE(refusal([] { loadScene("builtin:clutter?n=5000&detail=16"); }).find("--max-memory"), std::string::npos);
-  EXPECT_EQ(refusal([] { loadScene("builtin:random?n=1000"); }), "");
+  EXPECT_EQ(refusal([] { loadScene("builtin:city?blocks=1000"); }).setting(), Setting::MaxMemory);
+  EXPECT_EQ(refusal([] { loadScene("builtin:clutter?n=5000&detail=16"); }).setting(), Setting::MaxMemory);
+  EXPECT_STREQ(refusal([] { loadScene("builtin:random?n=1000"); }).what(), "");
 }
 
 TEST(MemoryLimit, RefusesAnImageTooLargeBeforeAllocatingIt) {
@@ -65,16 +66,16 @@ TEST(MemoryLimit, RefusesAnImageTooLargeBeforeAllocatingIt) {
   for (const AlgorithmInfo& a : algorithms()) {
     RenderOptions options;
     options.algorithm = a.name;
-    const std::string why = refusal([&] { render(scene, camera, options); });
-    EXPECT_NE(why.find("--size 16384x16384 with 48 triangles needs about"), std::string::npos) << a.name << ": " << why;
+    const std::string why = refusal([&] { render(scene, camera, options); }).what();
+    EXPECT_NE(why.find("a 16384x16384 image with 48 triangles needs about"), std::string::npos) << a.name << ": " << why;
   }
   // The same image fits with fewer buffers asked for but not with --verify's second frame.
   const Camera small = resolveCamera(*scene.camera, 2048, 2048, scene.bounds());
   RenderOptions options;
-  EXPECT_EQ(refusal([&] { render(scene, small, options); }), "");
+  EXPECT_STREQ(refusal([&] { render(scene, small, options); }).what(), "");
   options.verify = true;
   setMemoryLimit(40 * kMiB);
-  EXPECT_NE(refusal([&] { render(scene, small, options); }).find("--max-memory"), std::string::npos);
+  EXPECT_EQ(refusal([&] { render(scene, small, options); }).setting(), Setting::MaxMemory);
 }
 
 // Random triangles of the size of the box cross each other everywhere: the BSP tree and the
@@ -86,9 +87,10 @@ TEST(MemoryLimit, StopsBspAndNewellSplittingAtTheLimit) {
   for (const char* name : {"bsp", "newell"}) {
     RenderOptions options;
     options.algorithm = name;
-    const std::string why = refusal([&] { render(scene, camera, options); });
-    EXPECT_NE(why.find(std::string(name) + ": the "), std::string::npos) << why;
-    EXPECT_NE(why.find("more than the memory limit of 4 MiB (--max-memory)"), std::string::npos) << why;
+    const InputError why = refusal([&] { render(scene, camera, options); });
+    EXPECT_EQ(why.setting(), Setting::MaxMemory) << why.what();
+    EXPECT_TRUE(why.subject().starts_with(std::string(name) + ": the ")) << why.what();
+    EXPECT_TRUE(why.detail().ends_with("more than the memory limit of 4 MiB")) << why.what();
   }
 }
 

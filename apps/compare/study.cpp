@@ -201,7 +201,7 @@ Json runVariant(const RunContext& ctx, const Variant& v) {
   try {
     run.update(timedRun(ctx, options, frame));
   } catch (const InputError& e) {  // e.g. a BSP tree over its fragment budget: reported, not fatal
-    run["error"] = e.what();
+    run["error"] = cliMessage(e);
     return run;
   }
   std::vector<PixelVerdict> verdicts;

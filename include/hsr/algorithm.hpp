@@ -137,7 +137,8 @@ const AlgorithmInfo* findAlgorithm(const std::string& name);
 /// thread). Throws std::invalid_argument when the name is taken or the declaration is malformed.
 void registerAlgorithm(AlgorithmInfo info);
 /// Checks `given` (parameter name -> text) against the algorithm's declaration and fills in the
-/// defaults. Throws InputError "--param NAME=VALUE: ..." for an unknown name or a bad value.
+/// defaults. Throws InputError keyed Setting::Param, subject "NAME=VALUE", for an unknown name or
+/// a bad value.
 AlgorithmParams resolveParams(const AlgorithmInfo& algorithm, const std::map<std::string, std::string>& given);
 /// "choice", "int", "real", "bool", "size".
 const char* paramTypeName(ParamType type);

@@ -39,8 +39,8 @@ constexpr bool has(FrameOutputs outputs, FrameOutputs part) {
   return part != FrameOutputs::DepthOnly && (uint8_t(outputs) & uint8_t(part)) == uint8_t(part);
 }
 /// "depth,face,triangle,color" (any order; depth alone = DepthOnly) <-> FrameOutputs; parse
-/// throws InputError naming `what` on an unknown word.
-FrameOutputs parseFrameOutputs(const std::string& list, const std::string& what = "--outputs");
+/// throws InputError naming `what` (a front end's own name of the list) on an unknown word.
+FrameOutputs parseFrameOutputs(const std::string& list, const std::string& what = "outputs");
 std::string frameOutputsName(FrameOutputs outputs);
 
 namespace detail {

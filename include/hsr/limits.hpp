@@ -13,11 +13,12 @@ namespace hsr {
 uint64_t memoryLimit();
 /// Sets the limit (bytes; 0 restores the machine's default). Thread-safe.
 void setMemoryLimit(uint64_t bytes);
-/// Throws InputError "WHAT needs about N MiB, more than the memory limit of M MiB (--max-memory)"
-/// when `bytes` exceeds the limit.
+/// Throws InputError keyed Setting::MaxMemory, subject `what` (the request), when `bytes` exceeds
+/// the limit: "WHAT needs about N MiB, more than the memory limit of M MiB".
 void checkMemory(double bytes, const std::string& what);
-/// Parses a size as --max-memory takes it: a number with an optional unit K, M, G or T (powers of
-/// 1024; "B" allowed after it: "512M", "2GiB", "1.5G"). Throws InputError naming `what`.
-uint64_t parseMemorySize(const std::string& text, const std::string& what = "--max-memory");
+/// Parses a size for the limit: a number with an optional unit K, M, G or T (powers of 1024; "B"
+/// allowed after it: "512M", "2GiB", "1.5G"). Throws InputError naming `what` (a front end passes
+/// its own name of the setting, the CLI "--max-memory").
+uint64_t parseMemorySize(const std::string& text, const std::string& what = "memory limit");
 
 }  // namespace hsr

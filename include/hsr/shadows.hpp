@@ -51,7 +51,7 @@ struct ShadowOptions {
   DepthFormat depthFormat;   // of the map's z-buffer (default f32:reversed)
   int threads = 0;           // 0: all cores
 };
-/// Throws InputError naming the flag (--shadow-map-size, --shadow-bias) for a value out of range.
+/// Throws InputError keyed Setting::ShadowMapSize or ShadowBias for a value out of range.
 void checkShadowOptions(const ShadowOptions& options);
 
 /// Per view pixel (row 0 at the top).

@@ -57,6 +57,11 @@ inline constexpr int kMaxImageSide = 16384;
 /// Throws ValueError with `message` (the module's own checks; hsr::InputError becomes ValueError too).
 [[noreturn]] inline void valueError(const std::string& message) { throw py::value_error(message); }
 
+/// An hsr::InputError in the module's terms: a keyed error names its setting as hsr.render's
+/// keyword or the module's function ("depth_format: ...", "params={'raster': 'x'}: ...",
+/// "... (hsr.set_max_memory)"); a plain one is its what() (module.cpp).
+std::string pythonMessage(const hsr::InputError& error);
+
 /// Loads a scene as hsr.load does: OSError (FileNotFoundError, IsADirectoryError, ...) when the
 /// named file cannot be opened, ValueError for bad content; the messages are the CLI's.
 hsr::Scene loadSceneOrRaise(const std::string& path);

@@ -6,6 +6,7 @@
 
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -16,6 +17,30 @@
 #endif
 
 namespace hsrpy {
+
+std::string pythonMessage(const hsr::InputError& error) {
+  switch (error.setting()) {
+    case hsr::Setting::Algorithm: return error.worded("algorithm");
+    case hsr::Setting::DepthFormat: return error.worded("depth_format");
+    case hsr::Setting::Size: return error.worded("camera size");
+    case hsr::Setting::MaxMemory: return error.worded("hsr.set_max_memory");
+    case hsr::Setting::Param: {  // subject "KEY=VALUE": named as the dict entry that was passed
+      const std::string& entry = error.subject();
+      const size_t eq = std::min(entry.find('='), entry.size());
+      const std::string value = eq < entry.size() ? entry.substr(eq + 1) : "";
+      return error.worded("params={'" + entry.substr(0, eq) + "': '" + value + "'}", "");
+    }
+    // Settings the module does not offer: the library's own wording.
+    case hsr::Setting::None:
+    case hsr::Setting::Verify:
+    case hsr::Setting::SwitchOff:
+    case hsr::Setting::Svg:
+    case hsr::Setting::OverdrawImage:
+    case hsr::Setting::ShadowMapSize:
+    case hsr::Setting::ShadowBias: return error.what();
+  }
+  return error.what();
+}
 
 namespace {
 
@@ -254,7 +279,7 @@ PYBIND11_MODULE(hsr, m) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const hsr::InputError& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
+      PyErr_SetString(PyExc_ValueError, pythonMessage(e).c_str());
     }
   });
   bindScene(m);
@@ -285,8 +310,8 @@ released while rendering; the arrays are the module's buffers, not copies.)");
       [](py::handle size) {
         if (size.is_none()) return hsr::setMemoryLimit(0);
         if (!py::isinstance<py::str>(size) && !py::isinstance<py::int_>(size))
-          throw hsr::InputError("set_max_memory: expected a number of bytes or a string such as '512M'");
-        hsr::setMemoryLimit(hsr::parseMemorySize(py::str(size).cast<std::string>(), "set_max_memory"));
+          throw hsr::InputError("hsr.set_max_memory: expected a number of bytes or a string such as '512M'");
+        hsr::setMemoryLimit(hsr::parseMemorySize(py::str(size).cast<std::string>(), "hsr.set_max_memory"));
       },
       py::arg("size"),
       R"(Sets the memory limit that hsr.render and hsr.load check before allocating (the CLI's

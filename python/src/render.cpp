@@ -112,7 +112,7 @@ hsr::RenderOptions optionsOf(const Wanted& wanted, const std::string& algorithm,
     valueError("algorithm '" + algorithm + "': unknown (known: " + known + ")");
   }
   o.params = paramsOf(params);
-  hsr::resolveParams(*info, o.params);  // InputError, the CLI's message
+  hsr::resolveParams(*info, o.params);  // InputError keyed Param: pythonMessage words it
   if (!depthFormat.empty()) o.depthFormat = hsr::DepthFormat::parse(depthFormat);
   o.outputs = frameOutputs(wanted);
   o.cull = choice<hsr::Cull>("cull", cull, {{"none", hsr::Cull::None}, {"back", hsr::Cull::Back}, {"front", hsr::Cull::Front}});
@@ -159,10 +159,7 @@ void checkMemory(const Wanted& wanted, size_t views, const hsr::Camera& camera) 
     hsr::checkMemory(bytes, "render: the outputs of " + std::to_string(views) + " view(s) of " +
                                 std::to_string(camera.width) + "x" + std::to_string(camera.height));
   } catch (const hsr::InputError& e) {
-    std::string message = e.what();
-    if (const size_t flag = message.rfind("(--max-memory)"); flag != std::string::npos)
-      message.replace(flag, std::string("(--max-memory)").size(), "(hsr.set_max_memory)");
-    PyErr_SetString(PyExc_MemoryError, message.c_str());
+    PyErr_SetString(PyExc_MemoryError, pythonMessage(e).c_str());
     throw py::error_already_set();
   }
 }

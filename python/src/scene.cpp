@@ -60,7 +60,7 @@ hsr::Scene loadSceneOrRaise(const std::string& path) {
   } catch (const hsr::InputError& e) {
     if (!problem) throw;  // ValueError (the module's translator)
     // OSError(errno, message): Python picks the subclass (FileNotFoundError, ...) from errno.
-    PyErr_SetObject(PyExc_OSError, py::make_tuple(problem, std::string(e.what())).ptr());
+    PyErr_SetObject(PyExc_OSError, py::make_tuple(problem, pythonMessage(e)).ptr());
     throw py::error_already_set();
   }
 }

@@ -1,4 +1,5 @@
-"""Scenes and cameras from Python, and bad input: exceptions with the CLI's messages, never a crash."""
+"""Scenes and cameras from Python, and bad input: exceptions with the CLI's messages (a setting named
+as the module names it), never a crash."""
 import numpy as np
 import pytest
 
@@ -147,12 +148,17 @@ def test_render_refuses_bad_arguments(cubes, cli):
         hsr.render(cubes, cam, outputs=())
     with pytest.raises(ValueError, match="algorithm 'nope': unknown"):
         hsr.render(cubes, cam, algorithm="nope")
+    # The library's errors about a setting: the CLI's detail, the setting named as the module names it.
     with pytest.raises(ValueError) as e:
         hsr.render(cubes, cam, depth_format="u17")
-    assert str(e.value) == cli_message(cli, "render", "builtin:cubes", "--depth-format", "u17")
+    cli_text = cli_message(cli, "render", "builtin:cubes", "--depth-format", "u17")
+    assert str(e.value) == "depth_format" + cli_text.removeprefix("--depth-format")
+    assert str(e.value) == "depth_format: unknown storage 'u17' (u16, u24, u32, f32)"
     with pytest.raises(ValueError) as e:
         hsr.render(cubes, cam, params={"raster": "nope"})
-    assert str(e.value) == cli_message(cli, "render", "builtin:cubes", "--param", "raster=nope")
+    cli_text = cli_message(cli, "render", "builtin:cubes", "--param", "raster=nope")
+    assert str(e.value) == "params={'raster': 'nope'}" + cli_text.removeprefix("--param raster=nope")
+    assert str(e.value).startswith("params={'raster': 'nope'}: not a value of zbuffer's raster")
     with pytest.raises(ValueError, match="cull 'sideways'"):
         hsr.render(cubes, cam, cull="sideways")
     with pytest.raises(ValueError, match="background"):
@@ -184,11 +190,12 @@ def test_max_memory_bounds_batches_and_scenes(cubes):
         hsr.set_max_memory("64M")
         assert hsr.max_memory() == 64 << 20
         # 300 views x 256 x 256 x (4 + 4) bytes = 150 MiB of outputs.
-        with pytest.raises(MemoryError, match=r"300 view\(s\) of 256x256 needs about 150 MiB.*hsr.set_max_memory"):
+        with pytest.raises(MemoryError, match=r"300 view\(s\) of 256x256 needs about 150 MiB.*\(hsr.set_max_memory\)$"):
             hsr.render(cubes, [cam] * 300)
         assert hsr.render(cubes, [cam] * 10)["depth"].shape == (10, 256, 256)
-        with pytest.raises(ValueError, match="more than the memory limit"):
+        with pytest.raises(ValueError, match=r"more than the memory limit of 64 MiB \(hsr.set_max_memory\)$") as e:
             hsr.load("builtin:random?n=1000000")
+        assert "--max-memory" not in str(e.value)
         hsr.set_max_memory(1 << 30)
         assert hsr.max_memory() == 1 << 30
     finally:

@@ -170,7 +170,7 @@ void Builder::partition(Job& job, std::vector<Job>& stack) {
         if (inputs_ + splits_ > options_.maxFragments)
           throw InputError("bsp: the tree of " + scene_.source + " would hold more than max-fragments=" +
                            std::to_string(options_.maxFragments) + " fragments (from " + std::to_string(inputs_) +
-                           " polygons); raise --param max-fragments or try the other heuristic");
+                           " polygons); raise the parameter max-fragments or try the other heuristic");
         checkMemoryFor(inputs_ + splits_);
         break;
       }

@@ -30,9 +30,10 @@ void algo::beginStats(Stats& st, const Scene& scene, const Camera& camera) {
 
 void algo::checkImage(const Camera& camera, DepthFormat format) {
   if (camera.width <= 0 || camera.height <= 0 || camera.width > kMaxImageSize || camera.height > kMaxImageSize)
-    throw InputError("--size: width and height must be in 1.." + std::to_string(kMaxImageSize));
+    throw InputError(Setting::Size, std::to_string(camera.width) + "x" + std::to_string(camera.height),
+                     "width and height must be in 1.." + std::to_string(kMaxImageSize));
   if (format.mapping == DepthMapping::Inv && !(camera.near > 0))
-    throw InputError("--depth-format: the inv mapping needs near > 0");
+    throw InputError(Setting::DepthFormat, "", "the inv mapping needs near > 0");
 }
 
 void algo::addFrameMemory(Stats& st, const Frame& frame) {

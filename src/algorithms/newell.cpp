@@ -159,7 +159,7 @@ void DepthSorter::addPolygon(std::span<const dvec3> vertices, uint32_t plane, ui
   pool_.insert(pool_.end(), vertices.begin(), vertices.end());
   if (polys_.size() >= maxPolygons_)
     throw InputError("newell: the depth sort of " + scene_.source + " would hold more than max-fragments=" +
-                     std::to_string(maxPolygons_) + " polygons; raise --param max-fragments");
+                     std::to_string(maxPolygons_) + " polygons; raise the parameter max-fragments");
   if (double(polys_.size()) >= memoryPolygons_)
     checkMemory(double(polys_.size() + 1) * kBytesPerPolygon,
                 "newell: the depth sort of " + scene_.source + " (" + std::to_string(polys_.size() + 1) + " polygons so far)");

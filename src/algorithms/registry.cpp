@@ -71,7 +71,7 @@ bool parseNumber(const std::string& text, double& value) {
 // The canonical text of `value` for parameter `p`, or an InputError naming the problem.
 std::string checkedValue(const AlgorithmInfo& algorithm, const ParamSpec& p, const std::string& value) {
   auto fail = [&](const std::string& problem) -> std::string {
-    throw InputError("--param " + p.name + "=" + value + ": " + problem);
+    throw InputError(Setting::Param, p.name + "=" + value, problem);
   };
   switch (p.type) {
     case ParamType::Choice:
@@ -187,8 +187,9 @@ AlgorithmParams resolveParams(const AlgorithmInfo& algorithm, const std::map<std
     if (!declared) {
       std::vector<std::string> names;
       for (const ParamSpec& p : algorithm.params) names.push_back(p.name);
-      throw InputError("--param " + name + "=" + value + ": " + algorithm.name + " has no parameter '" + name +
-                       "' (" + (names.empty() ? "it takes none" : "its parameters: " + joined(names, ", ")) + ")");
+      throw InputError(Setting::Param, name + "=" + value,
+                       algorithm.name + " has no parameter '" + name + "' (" +
+                           (names.empty() ? "it takes none" : "its parameters: " + joined(names, ", ")) + ")");
     }
   }
   AlgorithmParams out;

@@ -23,12 +23,12 @@ DepthFormat DepthFormat::parse(const std::string& text) {
   else if (storage == "u24") f.storage = DepthStorage::U24;
   else if (storage == "u32") f.storage = DepthStorage::U32;
   else if (storage == "f32") f.storage = DepthStorage::F32;
-  else throw InputError("--depth-format: unknown storage '" + storage + "' (u16, u24, u32, f32)");
+  else throw InputError(Setting::DepthFormat, "", "unknown storage '" + storage + "' (u16, u24, u32, f32)");
   if (mapping == "z") f.mapping = DepthMapping::Z;
   else if (mapping == "reversed") f.mapping = DepthMapping::Reversed;
   else if (mapping == "inv") f.mapping = DepthMapping::Inv;
   else if (mapping == "linear") f.mapping = DepthMapping::Linear;
-  else throw InputError("--depth-format: unknown mapping '" + mapping + "' (z, reversed, inv, linear)");
+  else throw InputError(Setting::DepthFormat, "", "unknown mapping '" + mapping + "' (z, reversed, inv, linear)");
   return f;
 }
 

@@ -45,8 +45,8 @@ void setMemoryLimit(uint64_t bytes) { gLimit.store(bytes, std::memory_order_rela
 void checkMemory(double bytes, const std::string& what) {
   const uint64_t limit = memoryLimit();
   if (!(bytes <= double(limit)))  // also NaN
-    throw InputError(what + " needs about " + mib(bytes) + " MiB, more than the memory limit of " + mib(double(limit)) +
-                     " MiB (--max-memory)");
+    throw InputError(Setting::MaxMemory, what,
+                     "needs about " + mib(bytes) + " MiB, more than the memory limit of " + mib(double(limit)) + " MiB");
 }
 
 uint64_t parseMemorySize(const std::string& text, const std::string& what) {

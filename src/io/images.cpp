@@ -90,7 +90,7 @@ void writeDepthImage(const Frame& frame, const std::string& path) {
 
 void writeOverdrawImage(const Frame& frame, const std::string& path) {
   io::requirePng(path);
-  io::requirePixels(frame, frame.writes.size(), "per-pixel write counts (--overdraw-image)", path);
+  io::requirePixels(frame, frame.writes.size(), "per-pixel write count", path);
   static constexpr uint8_t kScale[8][3] = {{0, 0, 0},     {40, 70, 200},  {40, 170, 80},  {230, 210, 40},
                                            {240, 140, 30}, {220, 40, 40}, {200, 60, 200}, {255, 255, 255}};
   std::vector<uint8_t> pixels(frame.writes.size() * 3);

@@ -103,8 +103,8 @@ std::string paintingAlgorithms() {
 void paintingOrder(const Scene& scene, const Camera& camera, const RenderOptions& options, PaintedPolygons& out) {
   const AlgorithmInfo* algorithm = findAlgorithm(options.algorithm);
   if (!algorithm || algorithm->capability != Capability::PaintsInOrder)
-    throw InputError("--svg: " + options.algorithm + " paints no polygons (vector output needs " +
-                     paintingAlgorithms() + ")");
+    throw InputError(Setting::Svg, "",
+                     options.algorithm + " paints no polygons (vector output needs " + paintingAlgorithms() + ")");
   const std::unique_ptr<Algorithm> object = algorithm->create(scene, resolveParams(*algorithm, options.params));
   auto* painter = dynamic_cast<algo::PaintsInOrder*>(object.get());
   if (!painter) throw std::logic_error(options.algorithm + " declares PaintsInOrder but does not implement it");

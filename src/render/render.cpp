@@ -29,7 +29,7 @@ void checkRenderMemory(const Scene& scene, const Camera& camera, const RenderOpt
   double bytes = double(camera.width) * double(camera.height) * perPixel +
                  double(scene.triangles.size()) * kWorkBytesPerTriangle;
   if (options.verify) bytes *= 2;
-  checkMemory(bytes, "--size " + std::to_string(camera.width) + "x" + std::to_string(camera.height) + " with " +
+  checkMemory(bytes, "a " + std::to_string(camera.width) + "x" + std::to_string(camera.height) + " image with " +
                          std::to_string(scene.triangles.size()) + " triangles");
 }
 
@@ -44,7 +44,7 @@ const AlgorithmInfo& algorithmNamed(const std::string& name) {
   if (!algorithm) {
     std::string names;
     for (const AlgorithmInfo& a : algorithms()) names += (names.empty() ? "" : ", ") + a.name;
-    throw InputError("--algorithm: unknown algorithm '" + name + "' (" + names + ")");
+    throw InputError(Setting::Algorithm, "", "unknown algorithm '" + name + "' (" + names + ")");
   }
   return *algorithm;
 }
@@ -54,8 +54,9 @@ void checkFrameOptions(const Scene& scene, const Camera& camera, const RenderOpt
   algo::checkImage(camera, options.depthFormat);
   checkRenderMemory(scene, camera, options);
   if (options.verify && !has(options.outputs, FrameOutputs::IdsAndDepth))
-    throw InputError("--verify: compares face and triangle ids, which the outputs asked for (" +
-                     frameOutputsName(options.outputs) + ") do not keep");
+    throw InputError(Setting::Verify, "",
+                     "compares face and triangle ids, which the outputs asked for (" +
+                         frameOutputsName(options.outputs) + ") do not keep");
 }
 
 void verifyFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
@@ -68,8 +69,8 @@ void switchOff(TiledSwitches& switches, const std::string& name) {
   else if (name == "mesh-culling") switches.meshCulling = false;
   else if (name == "background-pump") switches.backgroundPump = false;
   else
-    throw InputError("--switch-off " + name +
-                     ": no such switch (defer-back-faces, defer-clusters, mesh-culling, background-pump)");
+    throw InputError(Setting::SwitchOff, name,
+                     "no such switch (defer-back-faces, defer-clusters, mesh-culling, background-pump)");
 }
 
 Renderer::Renderer(const Scene& scene, const RenderOptions& options)

@@ -391,11 +391,20 @@ std::string describeLight(const Light& light) {
   return std::string(light.kind == Light::Kind::Directional ? "directional " : "point ") + formatVec(light.vector);
 }
 
+namespace {
+
+// Both the options and a light camera made directly check the map size the same way.
+void checkMapSize(int mapSize) {
+  if (mapSize < kMinShadowMapSize || mapSize > kMaxShadowMapSize)
+    throw InputError(Setting::ShadowMapSize, std::to_string(mapSize),
+                     "must be " + std::to_string(kMinShadowMapSize) + " to " + std::to_string(kMaxShadowMapSize));
+}
+
+}  // namespace
+
 Camera lightCamera(const Bounds3& sceneBounds, const Light& light, int mapSize) {
   checkLight(light, "shadows");
-  if (mapSize < kMinShadowMapSize || mapSize > kMaxShadowMapSize)
-    throw InputError("--shadow-map-size " + std::to_string(mapSize) + ": must be " +
-                     std::to_string(kMinShadowMapSize) + " to " + std::to_string(kMaxShadowMapSize));
+  checkMapSize(mapSize);
   if (sceneBounds.empty() || !finite(sceneBounds.lo) || !finite(sceneBounds.hi))
     throw InputError("shadows: the scene has no geometry to frame a shadow map around");
   if (!(glm::length(sceneBounds.hi - sceneBounds.lo) > 0))
@@ -405,11 +414,9 @@ Camera lightCamera(const Bounds3& sceneBounds, const Light& light, int mapSize) 
 }
 
 void checkShadowOptions(const ShadowOptions& o) {
-  if (o.mapSize < kMinShadowMapSize || o.mapSize > kMaxShadowMapSize)
-    throw InputError("--shadow-map-size " + std::to_string(o.mapSize) + ": must be " +
-                     std::to_string(kMinShadowMapSize) + " to " + std::to_string(kMaxShadowMapSize));
+  checkMapSize(o.mapSize);
   if (!std::isfinite(o.bias) || o.bias < 0)
-    throw InputError("--shadow-bias: must be a finite number of texels, 0 or more");
+    throw InputError(Setting::ShadowBias, "", "must be a finite number of texels, 0 or more");
   if (!std::isfinite(o.ambient) || o.ambient < 0 || o.ambient > 1)
     throw InputError("shadows: the ambient factor must be in [0, 1]");
 }

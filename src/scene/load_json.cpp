@@ -27,8 +27,10 @@ class EntryReader {
       : where_(path + ": meshes[" + std::to_string(index) + "]"), entry_(entry) {}
 
   [[noreturn]] void fail(const std::string& key, const std::string& problem) const {
-    throw InputError(where_ + (key.empty() ? "" : "." + key) + ": " + problem);
+    throw InputError(at(key) + problem);
   }
+  /// "file: meshes[i].key: "
+  std::string at(const std::string& key) const { return where_ + (key.empty() ? "" : "." + key) + ": "; }
 
   bool has(const char* key) const { return entry_.contains(key); }
 
@@ -252,6 +254,8 @@ Scene loadSceneJson(const std::string& path, std::string_view bytes, LoadContext
       try {
         sub = loadAny(spec, context);
       } catch (const InputError& e) {  // a built-in scene is no file: say where it was named
+        if (e.setting() == Setting::MaxMemory)  // still keyed: each front end names its limit
+          throw InputError(Setting::MaxMemory, entry.at("builtin") + e.subject(), e.detail());
         entry.fail("builtin", e.what());
       }
       sub.problems = {};  // generated finalized: the merged scene's finalize() redoes its findings
