@@ -185,11 +185,15 @@ AlgorithmParams resolveParams(const AlgorithmInfo& algorithm, const std::map<std
     bool declared = false;
     for (const ParamSpec& p : algorithm.params) declared |= p.name == name;
     if (!declared) {
-      std::vector<std::string> names;
+      std::vector<std::string> names, others;
       for (const ParamSpec& p : algorithm.params) names.push_back(p.name);
+      for (const AlgorithmInfo& a : registry())  // where it lives instead (e.g. region: zbuffer-regions)
+        for (const ParamSpec& p : a.params)
+          if (p.name == name && a.name != algorithm.name) others.push_back(a.name);
       throw InputError(Setting::Param, name + "=" + value,
                        algorithm.name + " has no parameter '" + name + "' (" +
-                           (names.empty() ? "it takes none" : "its parameters: " + joined(names, ", ")) + ")");
+                           (names.empty() ? "it takes none" : "its parameters: " + joined(names, ", ")) +
+                           (others.empty() ? "" : "; " + joined(others, ", ") + " take it") + ")");
     }
   }
   AlgorithmParams out;

@@ -53,8 +53,9 @@ class Zbuffer final : public SceneAlgorithm {
     if (raster != "tiled") return drawScene(scene_, camera, options, WriteRule::DepthTest, drawRasterOf(params_),
                                             /*order: submission*/ {}, buffers_, frame);
     if (options.countWrites)
-      throw InputError("--overdraw-image: zbuffer's tiled rasterizer does not count writes per pixel (it replaces "
-                       "whole blocks at once); add --param raster=halfspace for the textbook z-buffer");
+      throw InputError(Setting::OverdrawImage, "",
+                       "zbuffer's tiled rasterizer does not count writes per pixel (it replaces whole blocks at "
+                       "once); the textbook z-buffer (parameter raster=halfspace) does");
     tiled_.draw(scene_, camera, options, frame);
   }
 
