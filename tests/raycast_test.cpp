@@ -520,7 +520,7 @@ TEST(Verify, IdenticalFramesHaveNothingWrongOrAmbiguous) {
   VerifyResult r = verifyAgainstReference(f.scene, f.cam, f.opt, f.reference, f.reference);
   EXPECT_EQ(r.wrong_pixels, 0u);
   EXPECT_EQ(r.ambiguous_pixels, 0u);
-  EXPECT_TRUE(r.firstWrong.empty());
+  EXPECT_TRUE(r.first_wrong.empty());
 }
 
 TEST(Verify, SwappedFaceDeepInsideIsWrongAndEdgePixelsAreAmbiguous) {
@@ -534,9 +534,9 @@ TEST(Verify, SwappedFaceDeepInsideIsWrongAndEdgePixelsAreAmbiguous) {
   VerifyResult r = verifyAgainstReference(f.scene, f.cam, f.opt, frame, f.reference);
   EXPECT_EQ(r.wrong_pixels, 2u);
   EXPECT_EQ(r.ambiguous_pixels, 1u);
-  ASSERT_EQ(r.firstWrong.size(), 2u);
-  EXPECT_EQ(r.firstWrong[0], std::make_pair(30, 30));
-  EXPECT_EQ(r.firstWrong[1], std::make_pair(15, 31));
+  ASSERT_EQ(r.first_wrong.size(), 2u);
+  EXPECT_EQ(r.first_wrong[0], std::make_pair(30, 30));
+  EXPECT_EQ(r.first_wrong[1], std::make_pair(15, 31));
 
   // Background instead of a surface in the middle of the front square: wrong.
   Frame empty = f.reference;

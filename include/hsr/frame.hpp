@@ -77,6 +77,22 @@ struct CacheLineAllocator {
 template <class T>
 using FrameBuffer = std::vector<T, CacheLineAllocator<T>>;
 
+/// A name with static storage, as Stats keeps its buffers' and details' names: a string literal
+/// (checked when compiled) or a name made at run time and interned for the program's life
+/// (StaticName::interned). Stats stores the view, so a warm frame neither copies nor allocates it.
+class StaticName {
+ public:
+  template <size_t N>
+  consteval StaticName(const char (&literal)[N]) : text_(literal, N - 1) {}
+  /// `name`'s text kept for the life of the program (thread-safe; the same text, the same storage).
+  static StaticName interned(std::string_view name);
+  operator std::string_view() const { return text_; }
+
+ private:
+  explicit StaticName(std::string_view text) : text_(text) {}
+  std::string_view text_;
+};
+
 /// Counters and timings of one frame. Counts are exact integers; times in milliseconds.
 struct Stats {
   std::string algorithm;
@@ -103,20 +119,20 @@ struct Stats {
   std::vector<std::pair<std::string, std::string>> params;
   /// The algorithm's own counters and facts (which rasterizer ran, what it deferred or culled),
   /// written as a nested JSON object named after the algorithm; docs/algorithms/NAME.md lists them.
-  /// Keys are string literals (static storage), so a warm frame allocates nothing for them.
+  /// Keys are StaticNames, so a warm frame allocates nothing for them.
   using Detail = std::variant<uint64_t, double, std::string>;
   std::vector<std::pair<std::string_view, Detail>> details;
 
   double overdraw() const { return covered_pixels ? double(color_writes) / double(covered_pixels) : 0.0; }
   void addTime(const std::string& stage, double ms);
-  /// Adds `bytes` to buffer `name`'s entry of `memory` (a string literal) and to memory_bytes.
-  void addMemory(std::string_view name, uint64_t bytes);
+  /// Adds `bytes` to buffer `name`'s entry of `memory` and to memory_bytes.
+  void addMemory(StaticName name, uint64_t bytes);
   /// Adds the counters of `part` (a part of this frame drawn on its own: a depth slice, a region)
   /// to these: front-end counts, culls, tests and writes, and its times stage by stage.
   void addCounts(const Stats& part);
   /// Sets the detail `key` (replacing its value); addDetail adds to a count (0 if absent).
-  void setDetail(std::string_view key, Detail value);
-  void addDetail(std::string_view key, uint64_t count);
+  void setDetail(StaticName key, Detail value);
+  void addDetail(StaticName key, uint64_t count);
   /// The count `key` of the details, if the algorithm reported it.
   std::optional<uint64_t> detailCount(std::string_view key) const;
   /// The text detail `key` ("" if absent).

@@ -103,7 +103,7 @@ struct VerifyResult {
   uint64_t ambiguous_pixels = 0;  // face id differs, but the two surfaces are closer in depth
                                   // than the format separates there, or the pixel centre lies
                                   // within 1/128 pixel of an edge of either triangle
-  std::vector<std::pair<int, int>> firstWrong;  // up to 16 wrong pixels (x, y), for messages
+  std::vector<std::pair<int, int>> first_wrong;  // up to 16 wrong pixels (x, y), for messages
 };
 /// Compares `frame` (rendered with `options`) against `reference` (the raycast of the same
 /// scene and camera) and classifies each differing pixel.

@@ -27,6 +27,7 @@
 // part of its screen box inside the entry (a large triangle, a floor or a wall, is far nearer at
 // one end than where it passes behind an occluder).
 #include <array>
+#include <cstdio>
 #include <string>
 
 #include "algorithms/algorithms.hpp"
@@ -278,18 +279,13 @@ class HierarchicalZBuffer {
   uint64_t hidden_ = 0;  // triangles rejected in every tile they meet
 };
 
-// "level0_tested", "level0_rejected", "level0_descended", ...: the details' keys (static storage,
-// as Stats::details requires), made once.
-const std::string& levelKey(int k, int what) {
-  static const std::array<std::array<std::string, 3>, kMaxLevels> keys = [] {
-    std::array<std::array<std::string, 3>, kMaxLevels> out;
-    for (int level = 0; level < kMaxLevels; ++level)
-      for (int w = 0; w < 3; ++w)
-        out[size_t(level)][size_t(w)] =
-            "level" + std::to_string(level) + (w == 0 ? "_tested" : w == 1 ? "_rejected" : "_descended");
-    return out;
-  }();
-  return keys[size_t(k)][size_t(what)];
+// "level0_tested", "level0_rejected", "level0_descended", ...: the details' keys, interned
+// (formatted on the stack: a warm frame allocates nothing for them).
+StaticName levelKey(int k, int what) {
+  char text[32];
+  const int n = std::snprintf(text, sizeof text, "level%d_%s", k,
+                              what == 0 ? "tested" : what == 1 ? "rejected" : "descended");
+  return StaticName::interned(std::string_view(text, size_t(n)));
 }
 
 // Occlusion culling (occlusion-cull=on): the scene's meshes are the objects, drawn in kBatches

@@ -160,7 +160,8 @@ void addPassStats(Stats& st, Stats& part, const algo::TiledState& pass, const ti
   part.details.clear();
   algo::tiledStats(part, pass.fe, &pass.bins, counters);
   st.addCounts(part);
-  for (const char* key : {"triangles_deferred", "clusters_deferred", "triangles_set_up_late"})
+  for (const StaticName key : {StaticName("triangles_deferred"), StaticName("clusters_deferred"),
+                               StaticName("triangles_set_up_late")})
     if (const auto count = part.detailCount(key)) st.addDetail(key, *count);
 }
 

@@ -207,8 +207,8 @@ VerifyResult verifyPixels(const Scene& scene, const Camera& camera, const Render
       continue;
     }
     ++result.wrong_pixels;
-    if (result.firstWrong.size() < 16)
-      result.firstWrong.emplace_back(int(differing[k] % size_t(camera.width)),
+    if (result.first_wrong.size() < 16)
+      result.first_wrong.emplace_back(int(differing[k] % size_t(camera.width)),
                                      int(differing[k] / size_t(camera.width)));
   }
   return result;

@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <cstring>
 #include <limits>
+#include <mutex>
+#include <set>
+#include <string>
 #include <nlohmann/json.hpp>
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -44,7 +47,16 @@ void Stats::addTime(const std::string& stage, double ms) {
   time_ms.emplace_back(stage, ms);
 }
 
-void Stats::addMemory(std::string_view name, uint64_t bytes) {
+StaticName StaticName::interned(std::string_view name) {
+  static std::mutex mutex;
+  static std::set<std::string, std::less<>> names;  // a set's elements never move
+  std::lock_guard lock(mutex);
+  auto it = names.find(name);
+  if (it == names.end()) it = names.emplace(name).first;
+  return StaticName(*it);
+}
+
+void Stats::addMemory(StaticName name, uint64_t bytes) {
   if (bytes == 0) return;
   memory_bytes += bytes;
   for (auto& [k, v] : memory)
@@ -67,7 +79,7 @@ void Stats::addCounts(const Stats& part) {
   for (const auto& [stage, ms] : part.time_ms) addTime(stage, ms);
 }
 
-void Stats::setDetail(std::string_view key, Detail value) {
+void Stats::setDetail(StaticName key, Detail value) {
   for (auto& [k, v] : details)
     if (k == key) {
       v = std::move(value);
@@ -76,7 +88,7 @@ void Stats::setDetail(std::string_view key, Detail value) {
   details.emplace_back(key, std::move(value));
 }
 
-void Stats::addDetail(std::string_view key, uint64_t count) {
+void Stats::addDetail(StaticName key, uint64_t count) {
   setDetail(key, detailCount(key).value_or(0) + count);
 }
 
