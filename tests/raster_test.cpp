@@ -14,7 +14,7 @@
 #include <sstream>
 #include <string>
 
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 #include "core/stream_fill.hpp"
 #include "frontend/frontend.hpp"
 #include "frontend/triangle_setup.hpp"

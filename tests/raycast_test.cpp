@@ -3,6 +3,8 @@
 // clipping, culling, thread determinism, and the --verify classification.
 #include <gtest/gtest.h>
 
+#include <hsr/render.hpp>
+
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -11,7 +13,7 @@
 
 #include "algorithms/algorithms.hpp"
 #include "algorithms/bvh.hpp"
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 
 namespace hsr {
 namespace {

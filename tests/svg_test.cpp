@@ -15,7 +15,7 @@
 #include <sstream>
 
 #include "conformance.hpp"
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 #include "temp_dir.hpp"
 #include "test_scenes.hpp"
 

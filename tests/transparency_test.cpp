@@ -11,7 +11,7 @@
 
 #include "algorithms/algorithms.hpp"
 #include "conformance.hpp"
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 #include "test_scenes.hpp"
 
 namespace hsr {

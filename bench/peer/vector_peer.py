@@ -133,7 +133,7 @@ def project(cam, v):
 
 
 def face_id_color(face):
-    """hsr's faceid colour (src/core/shading.cpp, faceIdColor)."""
+    """hsr's faceid colour (src/scene/shading.cpp, faceIdColor)."""
     h = ((face + 1) * 2654435761) & 0xFFFFFFFF
     h ^= h >> 15
     return (64 + (h & 0xBF), 64 + ((h >> 8) & 0xBF), 64 + ((h >> 16) & 0xBF))

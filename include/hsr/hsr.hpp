@@ -8,6 +8,7 @@
 #include <hsr/frame.hpp>
 #include <hsr/io.hpp>
 #include <hsr/limits.hpp>
+#include <hsr/options.hpp>
 #include <hsr/render.hpp>
 #include <hsr/scene.hpp>
 #include <hsr/shadows.hpp>

@@ -16,7 +16,10 @@
 #include <hsr/camera.hpp>
 #include <hsr/depth_format.hpp>
 #include <hsr/frame.hpp>
-#include <hsr/render.hpp>
+#include <hsr/camera.hpp>
+#include <hsr/frame.hpp>
+#include <hsr/options.hpp>
+#include <hsr/scene.hpp>
 #include <hsr/scene.hpp>
 
 #include <memory>

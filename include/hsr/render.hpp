@@ -13,7 +13,9 @@
 #include <hsr/camera.hpp>
 #include <hsr/depth_format.hpp>
 #include <hsr/frame.hpp>
+#include <hsr/options.hpp>
 #include <hsr/scene.hpp>
+#include <hsr/verify.hpp>
 
 #include <map>
 #include <memory>
@@ -21,40 +23,6 @@
 #include <vector>
 
 namespace hsr {
-
-enum class Cull : uint8_t { None, Back, Front };
-enum class Shading : uint8_t { Flat, Lambert, FaceId };
-
-/// The tiled z-buffer's and the occlusion buffer's optimisations, each of which leaves every image
-/// and stored depth the same bits: all on by default, turned off to test that and to measure
-/// what each saves (the command line's --switch-off NAME; docs/kernel.md).
-struct TiledSwitches {
-  bool deferBackFaces = true;  // defer-back-faces: with cull none, back faces set up after the front faces
-  bool deferClusters = true;   // defer-clusters: whole clusters facing away deferred (with cull back: culled)
-  bool meshCulling = true;     // mesh-culling: scenes of many meshes culled mesh by mesh (docs/occlusion.md)
-  bool backgroundPump = true;  // background-pump: idle tiles' background streamed between the kernel's blocks
-};
-/// The switches' names, as --switch-off takes them.
-inline constexpr const char* kTiledSwitchNames[] = {"defer-back-faces", "defer-clusters", "mesh-culling",
-                                                    "background-pump"};
-/// Turns off the switch `name` (kTiledSwitchNames); InputError for another name.
-void switchOff(TiledSwitches& switches, const std::string& name);
-
-struct RenderOptions {
-  std::string algorithm = "zbuffer";
-  /// The algorithm's own parameters, name -> value as text (`--param name=value`); those not
-  /// given take their defaults (`hsr algorithms` lists them).
-  std::map<std::string, std::string> params;
-  DepthFormat depthFormat;                // default f32:reversed
-  FrameOutputs outputs = FrameOutputs::All;  // what is resolved into the Frame (frame.hpp)
-  Cull cull = Cull::None;
-  Shading shading = Shading::Lambert;
-  Rgba8 background{0, 0, 0, 255};
-  int threads = 0;                        // 0: all cores
-  bool verify = false;                    // also render the reference and count wrong pixels
-  bool countWrites = false;               // fill Frame::writes: fragments written per pixel
-  TiledSwitches tiled;                    // zbuffer raster=tiled: its optimisations, all on
-};
 
 /// One algorithm made for one scene, kept from view to view: "build once, view many". What the
 /// algorithm makes for the scene (a BSP tree, the tiled z-buffer's bins and buffers, the
@@ -96,19 +64,5 @@ void render(const Scene& scene, const Camera& camera, const RenderOptions& optio
 /// The instruction set the tiled rasterizer's SIMD kernel runs with on this machine, chosen at
 /// run time (e.g. "AVX3" = AVX-512, "AVX2", "SSE4", "EMU128"): for benchmark records.
 const char* kernelInstructionSet();
-
-/// Result of comparing a frame with the exact reference.
-struct VerifyResult {
-  uint64_t wrong_pixels = 0;      // face id differs and the difference is not explained below
-  uint64_t ambiguous_pixels = 0;  // face id differs, but the two surfaces are closer in depth
-                                  // than the format separates there, or the pixel centre lies
-                                  // within 1/128 pixel of an edge of either triangle
-  std::vector<std::pair<int, int>> first_wrong;  // up to 16 wrong pixels (x, y), for messages
-};
-/// Compares `frame` (rendered with `options`) against `reference` (the raycast of the same
-/// scene and camera) and classifies each differing pixel.
-VerifyResult verifyAgainstReference(const Scene& scene, const Camera& camera,
-                                    const RenderOptions& options, const Frame& frame,
-                                    const Frame& reference);
 
 }  // namespace hsr

@@ -14,7 +14,10 @@
 //    light; the depth bias is in texels: a receiver is shadowed when the map's depth at its
 //    texel centre is nearer than the receiver's own plane there by more than bias texel widths.
 #pragma once
-#include <hsr/render.hpp>
+#include <hsr/camera.hpp>
+#include <hsr/frame.hpp>
+#include <hsr/options.hpp>
+#include <hsr/scene.hpp>
 
 #include <cstdint>
 #include <string>

@@ -3,7 +3,10 @@
 // the order is exact, so an SVG renderer's picture is the raster image (away from anti-aliased
 // edges). Used by `hsr render --svg` (docs/vector-output.md).
 #pragma once
-#include <hsr/render.hpp>
+#include <hsr/camera.hpp>
+#include <hsr/frame.hpp>
+#include <hsr/options.hpp>
+#include <hsr/scene.hpp>
 
 #include <string>
 

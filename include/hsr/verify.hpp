@@ -1,12 +1,29 @@
 // Pixel-by-pixel verification against the exact reference: what --verify counts, kept per pixel
 // for error maps (hsr compare's report).
 #pragma once
-#include <hsr/render.hpp>
+#include <hsr/camera.hpp>
+#include <hsr/frame.hpp>
+#include <hsr/options.hpp>
+#include <hsr/scene.hpp>
 
 #include <cstdint>
 #include <vector>
 
 namespace hsr {
+
+/// Result of comparing a frame with the exact reference.
+struct VerifyResult {
+  uint64_t wrong_pixels = 0;      // face id differs and the difference is not explained below
+  uint64_t ambiguous_pixels = 0;  // face id differs, but the two surfaces are closer in depth
+                                  // than the format separates there, or the pixel centre lies
+                                  // within 1/128 pixel of an edge of either triangle
+  std::vector<std::pair<int, int>> first_wrong;  // up to 16 wrong pixels (x, y), for messages
+};
+/// Compares `frame` (rendered with `options`) against `reference` (the raycast of the same
+/// scene and camera) and classifies each differing pixel.
+VerifyResult verifyAgainstReference(const Scene& scene, const Camera& camera,
+                                    const RenderOptions& options, const Frame& frame,
+                                    const Frame& reference);
 
 /// How a pixel of a frame compares with the reference's.
 enum class PixelVerdict : uint8_t {

@@ -3,7 +3,10 @@
 // and that triangle's normal. For users who render datasets (the Python module, `hsr render
 // --instance-ids/--barycentric`); built on render() and the Frame, outside any algorithm.
 #pragma once
-#include <hsr/render.hpp>
+#include <hsr/camera.hpp>
+#include <hsr/frame.hpp>
+#include <hsr/options.hpp>
+#include <hsr/scene.hpp>
 
 #include <functional>
 #include <span>

@@ -7,7 +7,7 @@
 #pragma once
 #include <hsr/algorithm.hpp>
 #include <hsr/bsp.hpp>
-#include <hsr/render.hpp>
+#include <hsr/options.hpp>
 
 #include <memory>
 

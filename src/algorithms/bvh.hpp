@@ -3,7 +3,9 @@
 // ray-triangle test. Built and queried by the raycast reference (raycast.cpp) and --verify
 // (verify.cpp); queries are const and safe from many threads at once.
 #pragma once
-#include <hsr/render.hpp>
+#include <hsr/camera.hpp>
+#include <hsr/options.hpp>
+#include <hsr/scene.hpp>
 
 #include <cstdint>
 #include <limits>

@@ -8,7 +8,7 @@
 #include "algorithms/algorithms.hpp"
 #include "core/depth_map.hpp"
 #include "core/parallel.hpp"
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 #include "core/timer.hpp"
 #include "setup/fragment_depth.hpp"
 #include "raster/halfspace.hpp"

@@ -5,7 +5,7 @@
 // submission order with the depth test. Runs on the caller's thread and the pool (core/parallel.hpp).
 #pragma once
 #include <hsr/algorithm.hpp>
-#include <hsr/render.hpp>
+#include <hsr/options.hpp>
 
 #include <cstdint>
 #include <functional>
@@ -15,7 +15,7 @@
 
 #include "core/timer.hpp"
 #include "core/depth_map.hpp"
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 #include "frontend/frontend.hpp"
 #include "setup/fragment_depth.hpp"
 

@@ -34,7 +34,7 @@
 #include "algorithms/draw.hpp"
 #include "algorithms/sort_keys.hpp"
 #include "algorithms/zbuffer_pixels.hpp"
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "frontend/mesh_bounds.hpp"

@@ -34,7 +34,7 @@
 #include "algorithms/algorithms.hpp"
 #include "algorithms/draw.hpp"
 #include "algorithms/zbuffer_pixels.hpp"
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"
 #include "setup/edge.hpp"

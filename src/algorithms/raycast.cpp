@@ -5,7 +5,7 @@
 #include "algorithms/algorithms.hpp"
 #include "algorithms/bvh.hpp"
 #include "core/parallel.hpp"
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 #include "core/timer.hpp"
 
 namespace hsr::algo {

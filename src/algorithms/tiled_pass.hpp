@@ -3,7 +3,7 @@
 // many workers a tile pass is worth, and the statistics of the tile pass.
 #pragma once
 #include <hsr/frame.hpp>
-#include <hsr/render.hpp>
+#include <hsr/options.hpp>
 
 #include <algorithm>
 #include <vector>

@@ -5,7 +5,7 @@
 // resolve as the drawing service's DepthTest rule (draw.cpp), so such an algorithm differs from
 // the textbook z-buffer only in which fragments it tests.
 #pragma once
-#include <hsr/render.hpp>
+#include <hsr/options.hpp>
 
 #include <span>
 #include <vector>
@@ -13,7 +13,7 @@
 #include "algorithms/algorithms.hpp"
 #include "algorithms/draw.hpp"
 #include "core/depth_map.hpp"
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 #include "frontend/frontend.hpp"
 #include "setup/fragment_depth.hpp"
 

@@ -17,7 +17,7 @@
 #include "algorithms/algorithms.hpp"
 #include "core/depth_map.hpp"
 #include "core/parallel.hpp"
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 #include "core/timer.hpp"
 #include "frontend/frontend.hpp"
 #include "raster/tiled.hpp"

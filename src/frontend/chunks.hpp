@@ -3,7 +3,7 @@
 // is written by the worker that sets it up (frontend.cpp); the tiled rasterizer bins it
 // (raster/binning.cpp) and the algorithms read it, chunk by chunk.
 #pragma once
-#include <hsr/render.hpp>
+#include <hsr/options.hpp>
 #include <hsr/scene.hpp>
 
 #include <algorithm>

@@ -10,7 +10,7 @@
 
 #include "core/depth_map.hpp"
 #include "core/parallel.hpp"
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 #include "frontend/clusters.hpp"
 #include "frontend/triangle_setup.hpp"
 #include "frontend/vertices.hpp"

@@ -8,7 +8,7 @@
 // set-up (integer edge functions with the top-left rule, depth planes). The consumer runs while
 // the chunk is still in its core's cache (the tiled rasterizer bins it there).
 #pragma once
-#include <hsr/render.hpp>
+#include <hsr/options.hpp>
 
 #include <cstddef>
 #include <cstdint>

@@ -3,7 +3,7 @@
 // or in SIMD batches (setupBatch, setup_batch.cpp: bit for bit the same). Called by the front
 // end's workers and by the tiled rasterizer's tile pass (deferred faces and clusters set up late).
 #pragma once
-#include <hsr/render.hpp>
+#include <hsr/options.hpp>
 
 #include <cstddef>
 #include <cstdint>

@@ -3,7 +3,9 @@
 // vertex_batch.cpp with SIMD). Used by the front end's passes on its worker threads, by the
 // tiled rasterizer's late set-up (Bins::projected) and by the occlusion culler.
 #pragma once
-#include <hsr/render.hpp>
+#include <hsr/camera.hpp>
+#include <hsr/options.hpp>
+#include <hsr/scene.hpp>
 
 #include <cstdint>
 

@@ -13,7 +13,7 @@
 #include <stdexcept>
 
 #include "algorithms/algorithms.hpp"
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 
 namespace hsr {
 namespace {

@@ -34,7 +34,7 @@
 // written than in submission order when a scene is drawn back to front).
 #pragma once
 #include <hsr/frame.hpp>
-#include <hsr/render.hpp>
+#include <hsr/options.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -44,7 +44,7 @@
 #include <new>
 #include <vector>
 
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 #include "frontend/chunks.hpp"
 #include "frontend/vertices.hpp"
 #include "setup/fragment_depth.hpp"

@@ -63,16 +63,6 @@ void verifyFrame(const Scene& scene, const Camera& camera, const RenderOptions& 
 
 }  // namespace
 
-void switchOff(TiledSwitches& switches, const std::string& name) {
-  if (name == "defer-back-faces") switches.deferBackFaces = false;
-  else if (name == "defer-clusters") switches.deferClusters = false;
-  else if (name == "mesh-culling") switches.meshCulling = false;
-  else if (name == "background-pump") switches.backgroundPump = false;
-  else
-    throw InputError(Setting::SwitchOff, name,
-                     "no such switch (defer-back-faces, defer-clusters, mesh-culling, background-pump)");
-}
-
 Renderer::Renderer(const Scene& scene, const RenderOptions& options)
     : scene_(&scene), options_(options), info_(&algorithmNamed(options.algorithm)),
       params_(resolveParams(*info_, options.params)), algorithm_(info_->create(scene, params_)) {}

@@ -4,6 +4,8 @@
 // only its own pixels, so any thread count gives the same mask.
 #include <hsr/shadows.hpp>
 
+#include <hsr/render.hpp>
+
 #include "algorithms/bvh.hpp"
 #include "core/parallel.hpp"
 #include "core/timer.hpp"

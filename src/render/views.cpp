@@ -4,6 +4,7 @@
 #include <hsr/views.hpp>
 
 #include <hsr/io.hpp>
+#include <hsr/render.hpp>
 
 #include "core/parallel.hpp"
 #include "io/encode.hpp"

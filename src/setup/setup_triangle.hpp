@@ -4,7 +4,7 @@
 #pragma once
 #include <cstdint>
 
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 
 namespace hsr {
 
@@ -29,7 +29,7 @@ struct SetupTriangle {
   // decide (never 0: such a triangle is dropped); 0 for a larger box. Lets the tiled kernel skip
   // its edge set-up.
   uint16_t coverage = 0;
-  Rgba8 color;  // shaded (core/shading.hpp) when the frame keeps colour and frontFacing (a
+  Rgba8 color;  // shaded (scene/shading.hpp) when the frame keeps colour and frontFacing (a
                 // back face is mostly hidden: the resolve shades the few that show)
 
   double eyeDepth(double px, double py) const { return depthNum.at(px, py) / depthDen.at(px, py); }

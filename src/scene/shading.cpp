@@ -1,5 +1,5 @@
 // Flat shading per triangle (see shading.hpp).
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -6,12 +6,12 @@
 // front end for the front faces it keeps.
 
 #undef HWY_TARGET_INCLUDE
-#define HWY_TARGET_INCLUDE "core/shading_batch.cpp"
+#define HWY_TARGET_INCLUDE "scene/shading_batch.cpp"
 #include <hwy/foreach_target.h>  // must come before highway.h
 
 #include <hwy/highway.h>
 
-#include "core/shading.hpp"
+#include "scene/shading.hpp"
 
 HWY_BEFORE_NAMESPACE();
 namespace hsr {

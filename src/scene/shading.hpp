@@ -1,7 +1,9 @@
 // Per-triangle flat shading shared by all algorithms, so every algorithm's colour image agrees:
 // face colour, a two-sided headlight Lambert shade, or a distinct colour per face id.
 #pragma once
-#include <hsr/render.hpp>
+#include <hsr/camera.hpp>
+#include <hsr/options.hpp>
+#include <hsr/scene.hpp>
 
 #include <vector>
 
@@ -22,7 +24,7 @@ class TriangleShader {
   TriangleShader(const Scene& scene, const Camera& camera, Shading shading);
   Rgba8 operator()(uint32_t triangleIndex) const;
   /// out[i] = (*this)(triangles[i]) for i < count, bit for bit; Lambert shades with SIMD
-  /// (core/shading_batch.cpp).
+  /// (scene/shading_batch.cpp).
   void shadeMany(const uint32_t* triangles, size_t count, Rgba8* out) const;
   /// Shading::Lambert's factor for a triangle: 0.25 + 0.75 |cos|, the cosine between its face's
   /// normal and the view ray to the face's centroid (two-sided headlight).
