@@ -22,6 +22,7 @@ using Runner = std::function<int()>;
 
 Runner setupRender(CLI::App& cmd);      // render_cmd.cpp
 Runner setupBench(CLI::App& cmd);       // bench_cmd.cpp
+Runner setupBatch(CLI::App& cmd);       // batch_cmd.cpp
 Runner setupAlgorithms(CLI::App& cmd);  // catalog_cmd.cpp
 Runner setupScenes(CLI::App& cmd);      // catalog_cmd.cpp
 Runner setupInfo(CLI::App& cmd);        // info_cmd.cpp

@@ -47,10 +47,6 @@ std::vector<double> parseNumbers(const std::string& flag, const std::string& tex
   return values;
 }
 
-struct ImageSize {
-  int width = 0, height = 0;
-};
-
 // An OpenCV K whose principal point lies outside the image was most likely made for another
 // image size: say so (on stderr; the render goes on).
 void warnPrincipalPointOutside(const hsr::CameraSpec& spec, ImageSize size, const std::string& cameraName) {
@@ -62,18 +58,6 @@ void warnPrincipalPointOutside(const hsr::CameraSpec& spec, ImageSize size, cons
              "'width' and 'height' in the camera JSON)\n",
              cameraName, cx, cy, size.width, size.height);
 }
-ImageSize parseSize(const std::string& text) {
-  size_t x = text.find_first_of("xX");
-  ImageSize size;
-  auto side = [](std::string_view s, int& out) {
-    auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
-    return ec == std::errc() && end == s.data() + s.size() && out >= 1 && out <= kMaxImageSide;
-  };
-  if (x == std::string::npos || !side(std::string_view(text).substr(0, x), size.width) ||
-      !side(std::string_view(text).substr(x + 1), size.height))
-    throw InputError(fmt::format("--size '{}': expected WIDTHxHEIGHT, each 1 to {}", text, kMaxImageSide));
-  return size;
-}
 
 hsr::Rgba8 parseColor(const std::string& text) {
   std::vector<double> v = parseNumbers("--background", text, 3, 4, "r,g,b or r,g,b,a");
@@ -81,15 +65,6 @@ hsr::Rgba8 parseColor(const std::string& text) {
     if (c < 0 || c > 255 || c != std::floor(c))
       throw InputError("--background '" + text + "': components are integers 0 to 255");
   return {uint8_t(v[0]), uint8_t(v[1]), uint8_t(v[2]), uint8_t(v.size() == 4 ? v[3] : 255)};
-}
-
-std::string readTextFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open: " + std::strerror(errno));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw InputError(path + ": cannot read: " + std::strerror(errno));
-  return text.str();
 }
 
 // A positive finite number, checked by CLI11 before it converts the flag's value.
@@ -129,6 +104,28 @@ Enum valueOf(const Names<Enum>& names, std::string name) {
 }
 
 }  // namespace
+
+ImageSize parseSize(const std::string& text, const std::string& what) {
+  size_t x = text.find_first_of("xX");
+  ImageSize size;
+  auto side = [](std::string_view s, int& out) {
+    auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+    return ec == std::errc() && end == s.data() + s.size() && out >= 1 && out <= kMaxImageSide;
+  };
+  if (x == std::string::npos || !side(std::string_view(text).substr(0, x), size.width) ||
+      !side(std::string_view(text).substr(x + 1), size.height))
+    throw InputError(fmt::format("{} '{}': expected WIDTHxHEIGHT, each 1 to {}", what, text, kMaxImageSide));
+  return size;
+}
+
+std::string readTextFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open: " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(path + ": cannot read: " + std::strerror(errno));
+  return text.str();
+}
 
 hsr::dvec3 parseVec3(const std::string& flag, const std::string& text) {
   std::vector<double> v = parseNumbers(flag, text, 3, 3, "x,y,z");

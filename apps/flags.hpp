@@ -1,6 +1,7 @@
 // The flags `hsr render` and `hsr bench` share: the scene, the image size, the camera and the
 // algorithm settings, declared on a subcommand, checked, then turned into a loaded scene and a
-// resolved camera (a Job). Used by apps/render_cmd.cpp and apps/bench_cmd.cpp.
+// resolved camera (a Job). Used by apps/render_cmd.cpp and apps/bench_cmd.cpp; the size parser
+// and the file reader also by apps/batch_cmd.cpp.
 #pragma once
 #include <hsr/hsr.hpp>
 
@@ -20,6 +21,14 @@ struct Job {
   hsr::RenderOptions options;
 };
 
+/// An image size in whole pixels.
+struct ImageSize {
+  int width = 0, height = 0;
+};
+/// "WxH" (each 1 to 16384); throws InputError "WHAT 'TEXT': expected WIDTHxHEIGHT, ...".
+ImageSize parseSize(const std::string& text, const std::string& what = "--size");
+/// The whole of a file; throws InputError "path: cannot open: ..." or "... cannot read".
+std::string readTextFile(const std::string& path);
 /// "x,y,z" as a vector; throws InputError "FLAG 'TEXT': expected x,y,z (finite numbers)".
 hsr::dvec3 parseVec3(const std::string& flag, const std::string& text);
 /// The name --cull takes for `cull`.

@@ -27,6 +27,8 @@ struct Subcommand {
 const Subcommand kSubcommands[] = {
     {"render", "Render a scene to colour, face-id and depth files, with statistics", setupRender},
     {"bench", "Time repeated renders of a scene: median and minimum", setupBench},
+    {"batch", "Render the views of a manifest, or one shard of them, into a folder with an index; resumable",
+     setupBatch},
     {"algorithms", "List the visibility algorithms: parameters, sources and guarantees", setupAlgorithms},
     {"scenes", "List the built-in scenes and their parameters", setupScenes},
     {"info", "Describe a scene: counts, meshes, bounds, problems, camera", setupInfo},

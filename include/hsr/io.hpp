@@ -32,7 +32,8 @@ enum class OutputKind : uint8_t { Color, FaceIds, Depth, DepthImage, OverdrawIma
 /// not know `path`'s extension (the writers check the same way).
 void checkOutputPath(OutputKind kind, const std::string& path);
 
-/// Writes `bytes` to `path` atomically (temporary file + rename). Throws std::runtime_error,
+/// Writes `bytes` to `path` atomically (a temporary file `path.tmp-PID-N` beside it, then a
+/// rename; a killed process may leave the temporary behind). Throws std::runtime_error,
 /// also when `path` exists and is not a regular file (a device, FIFO, socket or directory is
 /// never replaced).
 void writeFileAtomic(const std::string& path, const void* bytes, size_t size);
