@@ -5,7 +5,7 @@
 set -euo pipefail
 packages=(build-essential cmake ninja-build pkg-config
   libglm-dev nlohmann-json3-dev libfmt-dev libcli11-dev libassimp-dev libopenexr-dev
-  libpng-dev libstb-dev libgtest-dev libbenchmark-dev libhwy-dev
+  libpng-dev libstb-dev libssl-dev libgtest-dev libbenchmark-dev libhwy-dev
   libjs-chart.js chromium fonts-dejavu-core python3-jsonschema
   python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest
   python3-opengl libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6
