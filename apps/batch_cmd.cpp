@@ -55,15 +55,13 @@ struct OutputType {
   std::vector<std::string> formats;  // file extensions, the default first
   hsr::FrameOutputs needs;           // the buffers the frame must resolve for it
 };
-// Depth needs face ids too: a frame with ids holds the exact eye depth, as `hsr render` writes
-// it; a depth-only frame holds the stored value mapped back, which depends on the depth format.
 const OutputType kOutputTypes[] = {
-    {"depth", OutputKind::Depth, {"npy", "pfm", "exr", "f32"}, hsr::FrameOutputs::FaceIds},
+    {"depth", OutputKind::Depth, {"npy", "pfm", "exr", "f32"}, hsr::FrameOutputs::DepthOnly},
     {"face_id", OutputKind::FaceId, {"npy", "png"}, hsr::FrameOutputs::FaceIds},
     {"instance_id", OutputKind::InstanceId, {"npy", "png"}, hsr::FrameOutputs::FaceIds},
     {"barycentric", OutputKind::Barycentric, {"npy"}, hsr::FrameOutputs::TriangleIds},
     {"color", OutputKind::Color, {"png"}, hsr::FrameOutputs::Color},
-    {"depth_image", OutputKind::DepthImage, {"png"}, hsr::FrameOutputs::FaceIds},
+    {"depth_image", OutputKind::DepthImage, {"png"}, hsr::FrameOutputs::DepthOnly},
 };
 const char* const kManifestKeys[] = {"id", "scene", "camera", "size", "outputs", "algorithm", "params",
                                      "depth_format"};
@@ -532,7 +530,7 @@ std::vector<FileRecord> renderView(const View& v, SceneInUse& s, int threads, co
   options.params = v.params;
   options.threads = threads;
   if (v.depthFormat) options.depthFormat = *v.depthFormat;
-  options.outputs = hsr::FrameOutputs::FaceIds;
+  options.outputs = hsr::FrameOutputs::DepthOnly;  // (depth is always resolved)
   for (const ViewOutput& o : v.outputs) options.outputs = options.outputs | o.type->needs;
   try {
     s.rendererFor(v, options).render(camera, options, frame);

@@ -165,7 +165,7 @@ void ViewFlags::declare(CLI::App& cmd) {
       ->check(CLI::IsMember(std::vector<std::string>(std::begin(hsr::kTiledSwitchNames), std::end(hsr::kTiledSwitchNames))));
   CLI::Option* depthOnlyFlag = cmd.add_flag(
       "--depth-only", depthOnly,
-      "z-buffer keeps only depth: no face ids or colour; depth is the stored value mapped back to eye depth");
+      "z-buffer resolves only depth: no face ids or colour (depth is the same bits as with them)");
   outputsFlag = cmd.add_option("--outputs", outputs,
                  "Buffers the z-buffer resolves, comma-separated: depth (always), face, triangle, color (default: "
                  "all; depth alone = --depth-only). Buffers not asked for are not written")

@@ -5,9 +5,9 @@
 // O(1) (the Ukrainian paper's lossless z-buffer compression), and each tile and 8x8 block keeps bounds
 // of its stored depth, so queries and later triangles skip whole tiles and blocks.
 //
-// Exact: the stored values are those the z-buffer stores (raster/fragment_depth.hpp), so
-// depthImage() equals render()'s FrameOutputs::DepthOnly frame bit for bit, for every depth
-// format and thread count; rectVisible() is answered from those values, not from approximations.
+// Exact: the stored values are those the z-buffer stores (raster/fragment_depth.hpp), for every
+// depth format and thread count; rectVisible() is answered from those values, not from
+// approximations, and depthImage() maps them back to eye depth.
 //
 //   hsr::OcclusionBuffer buffer;
 //   buffer.render(occluders, camera);                       // replaces what it held
@@ -82,8 +82,8 @@ class OcclusionBuffer {
   /// clear value where nothing was drawn). Throws InputError outside the image.
   double storedAt(int x, int y) const;
 
-  /// The depth image of FrameOutputs::DepthOnly: eye depth of every pixel's stored value, +inf
-  /// where nothing was drawn, into frame.depth (faceId, triangleId and color emptied). Sets
+  /// The eye depth of every pixel's stored value (within the format's rounding of render()'s
+  /// exact depth), +inf where nothing was drawn, into frame.depth (faceId, triangleId and color emptied). Sets
   /// frame.stats to render()'s statistics with covered_pixels counted.
   void depthImage(Frame& frame) const;
 

@@ -133,10 +133,9 @@ void beginStats(Stats& st, const Scene& scene, const Camera& camera);
 void checkImage(const Camera& camera, DepthFormat format);
 
 /// Whether the occlusion buffer culls this scene mesh by mesh (occlusion.cpp: at least 64
-/// meshes, a perspective camera, the switch mesh-culling on). zbuffer's depth-only frames of such
-/// scenes go through an occlusion buffer and its depthImage (the same bits).
+/// meshes, a perspective camera, the switch mesh-culling on).
 bool meshCullingApplies(const Scene& scene, const Camera& camera, const TiledSwitches& switches);
-/// Whether a frame with ids of this scene may gain from mesh culling's first pass (algo::cullMeshes):
+/// Whether a frame of this scene may gain from mesh culling's first pass (algo::cullMeshes):
 /// meshCullingApplies, and the scene holds enough triangles for the pass over every tile of the
 /// image (occlusion.cpp, kFrameWaitingPerTile); cullMeshes then decides by the meshes it can test.
 bool meshCullingPaysForFrame(const Scene& scene, const Camera& camera, const TiledSwitches& switches);

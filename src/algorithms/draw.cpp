@@ -70,7 +70,7 @@ struct DepthTestRule {
   template <class P, class T>
   static bool write(P& p, const Fragment<T>& f, DrawCounters& n) {
     if (!depthTest<P::kMapping>(f.z, p.depth[f.idx], n)) return false;
-    if (p.keepWinner) p.winner[f.idx] = f.i + 1;
+    p.winner[f.idx] = f.i + 1;
     return true;
   }
 };
@@ -160,7 +160,7 @@ struct Pixels {
   const TriangleShader& shade;
   const DerivedScene* derived;
   Frame& frame;
-  bool keepWinner, color;
+  bool color;
   std::vector<T>& depth;           // the depth rules: the stored values
   std::vector<uint32_t>& winner;   // 1 + the index of the winning (last written) triangle, 0 = none
   std::vector<double> nearest;     // DepthTestBlend: the eye depth of the winner's fragment
@@ -183,7 +183,6 @@ class FragmentWriter {
            shade,
            derived,
            frame,
-           /*keepWinner=*/R::kRule != WriteRule::DepthTest || opt.outputs != FrameOutputs::DepthOnly,
            /*color=*/has(opt.outputs, FrameOutputs::Color),
            buffers.depth<T>(),
            buffers.winner(),
@@ -195,8 +194,7 @@ class FragmentWriter {
     if constexpr (R::kRule == WriteRule::DepthTestBlend) p_.nearest.assign(pixels, INFINITY);
     if constexpr (R::kRule == WriteRule::BlendUnder)
       if (p_.color) p_.sums.assign(pixels, UnderSum{});
-    if (p_.keepWinner) p_.winner.assign(pixels, 0);
-    else p_.winner.clear();
+    p_.winner.assign(pixels, 0);
   }
 
   void addMemory(Stats& st) const {
@@ -242,12 +240,10 @@ class FragmentWriter {
           for (int x = 0; x < cam_.width; ++x) frame.color[frame.index(x, y)] = p_.sums[frame.index(x, y)].over(opt_.background);
     const PixelRect rows{0, y0, cam_.width - 1, y1 - 1, size_t(cam_.width)};
     const size_t offset = size_t(y0) * size_t(cam_.width);
-    const std::span<const T> depth = p_.depth.empty() ? std::span<const T>{} : std::span<const T>(p_.depth).subspan(offset);
-    const std::span<const uint32_t> winner =
-        p_.winner.empty() ? std::span<const uint32_t>{} : std::span<const uint32_t>(p_.winner).subspan(offset);
+    const std::span<const uint32_t> winner = std::span<const uint32_t>(p_.winner).subspan(offset);
     const bool colorAtResolve = p_.color && R::kColorAtResolve;
-    resolvePixels<S, M>(
-        rows, depth, clear_, winner, p_.tris, cam_, opt_.outputs, p_.derived,
+    resolvePixels(
+        rows, winner, p_.tris, opt_.outputs, p_.derived,
         [&](uint32_t w, size_t idx) {
           if (colorAtResolve) frame.color[idx] = colors_[w];
         },

@@ -170,28 +170,19 @@ struct PixelRect {
   size_t at(int x, int y) const { return size_t(y - y0) * stride + size_t(x - x0); }
 };
 
-/// The resolve, one copy for every z-buffer: each pixel of `rect` from its per-pixel state — with
-/// winners (1 + the index into `tris` of the last triangle written, 0 = none), its ids and exact
-/// eye depth from that triangle (resolveWinner) and `color(winner index, frame index)` for the
-/// colour; without (depth only), the eye depth of its stored value, `clear` = none. Counts the
-/// pixels covered.
-template <DepthStorage S, DepthMapping M, class Color>
-void resolvePixels(const PixelRect& rect, std::span<const DepthT<S>> depth, DepthT<S> clear,
-                   std::span<const uint32_t> winner, std::span<const SetupTriangle> tris, const Camera& camera,
-                   FrameOutputs outputs, const DerivedScene* derived, Color&& color, Frame& frame,
-                   DrawCounters& n) {
+/// The resolve, one copy for every z-buffer: each pixel of `rect` from its winner (1 + the index
+/// into `tris` of the last triangle written, 0 = none): its ids and exact eye depth from that
+/// triangle (resolveWinner), for every set of outputs, and `color(winner index, frame index)` for
+/// the colour. Counts the pixels covered.
+template <class Color>
+void resolvePixels(const PixelRect& rect, std::span<const uint32_t> winner, std::span<const SetupTriangle> tris,
+                   FrameOutputs outputs, const DerivedScene* derived, Color&& color, Frame& frame, DrawCounters& n) {
   for (int y = rect.y0; y <= rect.y1; ++y)
     for (int x = rect.x0; x <= rect.x1; ++x) {
       const size_t at = rect.at(x, y), idx = frame.index(x, y);
-      if (winner.empty()) {
-        if (depth[at] == clear) continue;
-        frame.depth[idx] =
-            float(eyeDepthOfStored<S, M>(double(depth[at]), camera.near, camera.far, camera.orthographic));
-      } else {
-        if (!winner[at]) continue;
-        resolveWinner(tris[winner[at] - 1], x, y, idx, outputs, derived, frame);
-        color(winner[at] - 1, idx);
-      }
+      if (!winner[at]) continue;
+      resolveWinner(tris[winner[at] - 1], x, y, idx, outputs, derived, frame);
+      color(winner[at] - 1, idx);
       ++n.covered;
     }
 }

@@ -34,7 +34,7 @@ namespace {
 // faster than other shares or more passes, each tile pass having its cost: see
 // docs/benchmarks.md.)
 constexpr size_t kMinMeshes = 64, kMaxPasses = 2, kPassShare = 20, kPassMeshes = 16;
-// For a frame with ids (algo::cullMeshes), the first pass is drawn again by the frame, so it
+// For a frame (algo::cullMeshes), the first pass is drawn again by the frame, so it
 // draws fewer: the nearest 40th (as many culled as with a 20th, in less time).
 constexpr size_t kFramePassShare = 40;
 // ... and only when the meshes left to test hold at least this many triangles per tile of the
@@ -515,8 +515,7 @@ void OcclusionBuffer::depthImage(Frame& frame) const {
       for (int i = 0; i < count; ++i) tiled::loadTile(im.tiles[size_t(first + i)], im.depth, mine[i]);
       for (int row = 0; row < tiled::kTileSize; row += kBand)
         for (int i = 0; i < count; ++i)
-          covered[worker] += tiled::resolveTile(bins, first + i, im.depth, FrameOutputs::DepthOnly, nullptr, Rgba8{},
-                                                mine[i], frame, row, row + kBand);
+          covered[worker] += tiled::resolveStoredDepth(bins, first + i, im.depth, mine[i], frame, row, row + kBand);
     }
     tiled::finishResolves();
   });

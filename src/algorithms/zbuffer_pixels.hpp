@@ -27,7 +27,7 @@ class ZBufferPixels {
   ZBufferPixels(const Camera& camera, const RenderOptions& options, Frame& frame)
       : camera_(camera), options_(options), frame_(frame), clear_(quantizeDepth<S>(options.depthFormat.clearValue())),
         depth_(size_t(camera.width) * size_t(camera.height), clear_),
-        winner_(options.outputs != FrameOutputs::DepthOnly ? depth_.size() : 0, 0) {}
+        winner_(depth_.size(), 0) {}
 
   /// "a is strictly nearer than b" in stored values (the depth test's comparison, uncounted).
   static bool nearer(T a, T b) { return storedNearer<M>(double(a), double(b)); }
@@ -61,13 +61,13 @@ class ZBufferPixels {
     claim(idx, i, n);
   }
 
-  /// Face ids, eye depths and colours of every pixel from the last fragment written (depth only:
-  /// the eye depth of the stored value): the drawing service's resolve (resolvePixels).
+  /// Face ids, eye depths and colours of every pixel from the last fragment written: the drawing
+  /// service's resolve (resolvePixels).
   void resolve(std::span<const SetupTriangle> tris, const TriangleShader& shade, DrawCounters& n) {
     const bool color = has(options_.outputs, FrameOutputs::Color);
     const PixelRect image{0, 0, camera_.width - 1, camera_.height - 1, size_t(camera_.width)};
-    resolvePixels<S, M>(
-        image, std::span<const T>(depth_), clear_, winner_, tris, camera_, options_.outputs, nullptr,
+    resolvePixels(
+        image, winner_, tris, options_.outputs, nullptr,
         [&](uint32_t w, size_t idx) {
           if (color) frame_.color[idx] = triangleColor(tris[w], shade);
         },
@@ -82,7 +82,7 @@ class ZBufferPixels {
  private:
   // The fragment of triangle i that wrote pixel idx: the winner, counted.
   void claim(size_t idx, uint32_t i, DrawCounters& n) {
-    if (!winner_.empty()) winner_[idx] = i + 1;
+    winner_[idx] = i + 1;
     countWritten(idx, frame_, n);
   }
 
@@ -91,7 +91,7 @@ class ZBufferPixels {
   Frame& frame_;
   const T clear_;
   std::vector<T> depth_;          // the stored values
-  std::vector<uint32_t> winner_;  // 1 + the index of the last triangle written, 0 = none (not kept for depth only)
+  std::vector<uint32_t> winner_;  // 1 + the index of the last triangle written, 0 = none
 };
 
 }  // namespace hsr::algo

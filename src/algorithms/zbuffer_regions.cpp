@@ -51,8 +51,8 @@ void drawRegions(std::span<const SetupTriangle> tris, const Camera& camera, cons
         });
       }
       rasterMs += timer.lap();
-      resolvePixels<S, M>(
-          region, std::span<const T>(depth), clear, winner, tris, camera, options.outputs, nullptr,
+      resolvePixels(
+          region, winner, tris, options.outputs, nullptr,
           [&](uint32_t w, size_t idx) {
             if (!colors.empty()) frame.color[idx] = colors[w];
           },

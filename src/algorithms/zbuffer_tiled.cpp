@@ -93,7 +93,6 @@ void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const Triangle
   const size_t allSegments = size_t(segmentsX) * size_t(bins.tilesY);
   const int workers = std::min(prepareTilePass(state, resolveThreads(opt.threads)), int(allSegments));
   if (state.scratch.size() < size_t(workers) * kSegmentTiles) state.scratch.resize(size_t(workers) * kSegmentTiles);
-  const bool ids = opt.outputs != FrameOutputs::DepthOnly;
   std::vector<uint32_t>& busy = state.busySegments;
   std::vector<uint32_t>& idleList = state.idleSegments;
   busy.clear();
@@ -135,10 +134,10 @@ void drawTiled(const RenderOptions& opt, const DepthSetup& depth, const Triangle
       const int ty = int(busy[unit]) / segmentsX, tx0 = (int(busy[unit]) % segmentsX) * kSegmentTiles;
       const int count = std::min(kSegmentTiles, bins.tilesX - tx0), first = ty * bins.tilesX + tx0;
       for (int i = 0; i < count; ++i) {
-        tiled::rasterizeTile(bins, first + i, depth, ids, scratch[i], state.orders[worker],
+        // (ids kept for depth only too: a pixel's depth is its winner's plane, whatever the outputs)
+        tiled::rasterizeTile(bins, first + i, depth, true, scratch[i], state.orders[worker],
                              state.counters[size_t(first + i)], false, &background);
-        if (ids)
-          tiled::prepareResolve(bins, first + i, opt.outputs, &shade, opt.background, scratch[i], &background);
+        tiled::prepareResolve(bins, first + i, opt.outputs, &shade, opt.background, scratch[i], &background);
       }
       // The next segment is claimed before this one's frame writes: a locked read-modify-write
       // waits until every streaming store before it has drained to memory.
@@ -180,27 +179,14 @@ void TiledZBuffer::draw(const Scene& scene, const Camera& cam, const RenderOptio
   st.setDetail("rasterizer", "tiled");
   st.depth_format = opt.depthFormat.name();
 
-  // Many meshes and enough triangles: mesh culling (docs/occlusion.md), through the occlusion
-  // buffer this object keeps. Depth only: the buffer's passes, then its depth image (bit
-  // for bit this path's). With ids: the buffer's first pass, then this path's frame of the meshes
-  // not found hidden (algo::cullMeshes). Scenes of few triangles skip it: the kept tiles' extra
-  // pass costs more than culling saves there (docs/benchmarks.md).
+  // Many meshes and enough triangles: mesh culling (docs/occlusion.md) through the occlusion
+  // buffer this object keeps: the buffer's first pass, then this path's frame of the meshes not
+  // found hidden (algo::cullMeshes). Scenes of few triangles skip it: the kept tiles' extra pass
+  // costs more than culling saves there (docs/benchmarks.md).
   constexpr size_t kByMeshesTriangles = 8192;
-  const bool depthOnly = opt.outputs == FrameOutputs::DepthOnly;
-  const bool byMeshes = scene.triangles.size() >= kByMeshesTriangles &&
-                        (depthOnly ? meshCullingApplies(scene, cam, opt.tiled) : meshCullingPaysForFrame(scene, cam, opt.tiled));
+  const bool byMeshes =
+      scene.triangles.size() >= kByMeshesTriangles && meshCullingPaysForFrame(scene, cam, opt.tiled);
   OcclusionBuffer& occluders = state_->occluders;
-  if (byMeshes && depthOnly) {
-    occluders.render(scene, cam, {opt.depthFormat, opt.cull, opt.threads, opt.tiled});
-    timer.lap();
-    occluders.depthImage(frame);  // (its statistics: the buffer's, and covered_pixels; render() names the algorithm)
-    std::erase_if(st.time_ms, [](const auto& stage) { return stage.first == "total"; });
-    st.addTime("resolve", timer.lap());
-    st.setDetail("rasterizer", "tiled");
-    st.color_writes = 0;
-    st.addMemory("frame.depth", frame.depth.size() * sizeof(float));
-    return;
-  }
   const DepthSetup depth{opt.depthFormat, cam.near, cam.far, cam.orthographic};
   const MeshCulling* culling = nullptr;
   if (byMeshes) {

@@ -1682,17 +1682,21 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
 
 uint64_t ResolveTile(const TileJob& job, const TileScratch& s, FrameOutputs outputs, Rgba8 background, int rowBegin,
                      int rowEnd, Frame& frame) {
-  switch (uint8_t(outputs)) {  // every set of flags a resolve with ids can be asked for
+  switch (uint8_t(outputs)) {  // every set of flags a frame can ask for: depth always, the rest as asked
+    case 0: return ResolveIdsT<0>(job, s, background, rowBegin, rowEnd, frame);
     case 1: return ResolveIdsT<1>(job, s, background, rowBegin, rowEnd, frame);
     case 2: return ResolveIdsT<2>(job, s, background, rowBegin, rowEnd, frame);
     case 3: return ResolveIdsT<3>(job, s, background, rowBegin, rowEnd, frame);
     case 4: return ResolveIdsT<4>(job, s, background, rowBegin, rowEnd, frame);
     case 5: return ResolveIdsT<5>(job, s, background, rowBegin, rowEnd, frame);
     case 6: return ResolveIdsT<6>(job, s, background, rowBegin, rowEnd, frame);
-    case 7: return ResolveIdsT<7>(job, s, background, rowBegin, rowEnd, frame);
-    default: break;
+    default: return ResolveIdsT<7>(job, s, background, rowBegin, rowEnd, frame);
   }
   static_assert(uint8_t(FrameOutputs::All) == 7);
+}
+
+// resolveStoredDepth (tiled.hpp): the eye depth of each stored value, for tiles kept without ids.
+uint64_t ResolveStoredDepth(const TileJob& job, const TileScratch& s, int rowBegin, int rowEnd, Frame& frame) {
   uint64_t covered = 0;
   visitDepthFormat(job.depth.format, [&]<DepthStorage S, DepthMapping M>() {
     covered = ResolveDepthT<S, M>(job, s, rowBegin, rowEnd, frame);
@@ -1703,7 +1707,7 @@ uint64_t ResolveTile(const TileJob& job, const TileScratch& s, FrameOutputs outp
 void PrepareResolve(const TileJob& job, FrameOutputs outputs, Rgba8 background) {
   if (job.scratch->state != TileState::Pixels) return;  // uniform: resolved from its triangle
   if (has(outputs, FrameOutputs::Color)) PrepareResolveT<true>(job, *job.scratch, background);
-  else if (outputs != FrameOutputs::DepthOnly) PrepareResolveT<false>(job, *job.scratch, background);
+  else PrepareResolveT<false>(job, *job.scratch, background);
 }
 
 // The exported entry: picks the compiled loop of the job's format and output.

@@ -25,6 +25,7 @@ namespace hsr::tiled {
 
 HWY_EXPORT(RasterizeTile);
 HWY_EXPORT(ResolveTile);
+HWY_EXPORT(ResolveStoredDepth);
 HWY_EXPORT(PrepareResolve);
 HWY_EXPORT(KernelTarget);
 HWY_EXPORT(FlushStreams);
@@ -53,8 +54,14 @@ void prepareResolve(const Bins& bins, int tile, FrameOutputs outputs, const Tria
 uint64_t resolveTile(const Bins& bins, int tile, const DepthSetup& depth, FrameOutputs outputs,
                      const TriangleShader* shader, Rgba8 background, const TileScratch& scratch, Frame& frame,
                      int rowBegin, int rowEnd) {
-  const TileJob job{&bins, tile, depth, outputs != FrameOutputs::DepthOnly, nullptr, nullptr, shader, nullptr};
+  const TileJob job{&bins, tile, depth, true, nullptr, nullptr, shader, nullptr};
   return HWY_DYNAMIC_DISPATCH(ResolveTile)(job, scratch, outputs, background, rowBegin, rowEnd, frame);
+}
+
+uint64_t resolveStoredDepth(const Bins& bins, int tile, const DepthSetup& depth, const TileScratch& scratch,
+                            Frame& frame, int rowBegin, int rowEnd) {
+  const TileJob job{&bins, tile, depth, false, nullptr, nullptr, nullptr, nullptr};
+  return HWY_DYNAMIC_DISPATCH(ResolveStoredDepth)(job, scratch, rowBegin, rowEnd, frame);
 }
 
 const char* kernelTarget() { return HWY_DYNAMIC_DISPATCH(KernelTarget)(); }

@@ -388,9 +388,9 @@ void binChunk(Bins& bins, size_t chunk, const FrontEndChunk& triangles, const De
 void rasterizeTile(const Bins& bins, int tile, const DepthSetup& depth, bool ids, TileScratch& scratch,
                    TileOrder& order, RasterCounters& counters, bool keep = false, BackgroundPump* pump = nullptr);
 
-/// Readies a tile that rasterizeTile(ids = true) left in `scratch` for resolveTile() with ids
-/// (any FrameOutputs but DepthOnly), right after rasterizing, while the tile's set-up
-/// triangles are still in this core's cache. A block won wholly by one triangle gets it as its
+/// Readies a tile that rasterizeTile(ids = true) left in `scratch` for resolveTile() (any
+/// FrameOutputs, DepthOnly too: depth comes from the winner's plane), right after rasterizing,
+/// while the tile's set-up triangles are still in this core's cache. A block won wholly by one triangle gets it as its
 /// blockKey, one where nothing was drawn blockClear (both resolved a row of lanes at a time);
 /// in the other blocks held pixel by pixel, each pixel is turned, in place, into what the frame
 /// gets — depth[i] becomes (float eye depth, int32 face
@@ -405,19 +405,25 @@ void prepareResolve(const Bins& bins, int tile, FrameOutputs outputs, const Tria
 /// Writes every pixel of the tile of `scratch` into `frame` as `outputs` asks: ids, eye depth
 /// of the winning triangle's plane at the pixel centre (exactly as the reference resolves it),
 /// its colour (SetupTriangle::color, or from `shader` for back faces; needed with
-/// FrameOutputs::Color only); or, for DepthOnly, the eye depth of
-/// the stored value; the background (-1, +inf, `background`) where nothing was drawn. The frame's
-/// buffers that `outputs` does not ask for are not touched. Only the tile's rows [rowBegin,
+/// FrameOutputs::Color only); for DepthOnly, that eye depth alone; the background (-1, +inf,
+/// `background`) where nothing was drawn. The frame's buffers that `outputs` does not ask for are not touched. Only the tile's rows [rowBegin,
 /// rowEnd) (tile-local): a caller resolving several tiles writes the frame band by band across
 /// them — row-major frame buffers written one 64x64 tile at a time with ordinary stores are
 /// much slower to write (64 rows x 4 buffers of scattered 256-byte pieces defeat the hardware
-/// prefetchers and TLB; see docs/benchmarks.md). With ids, the tile must have been through
-/// prepareResolve() (std::logic_error otherwise). Returns the number of covered pixels.
+/// prefetchers and TLB; see docs/benchmarks.md). The tile must have been rasterized with ids
+/// and through prepareResolve() (std::logic_error otherwise). Returns the number of covered pixels.
 /// The frame's whole cache lines are written with streaming stores: a thread that called
 /// resolveTile calls finishResolves() before another thread reads the frame.
 uint64_t resolveTile(const Bins& bins, int tile, const DepthSetup& depth, FrameOutputs outputs,
                      const TriangleShader* shader, Rgba8 background, const TileScratch& scratch, Frame& frame,
                      int rowBegin = 0, int rowEnd = kTileSize);
+/// The eye depth of each stored value of a tile rasterized without ids (rasterizeTile(ids =
+/// false), as the occlusion buffer keeps them), +inf where nothing was drawn, into `frame`'s
+/// depth; rows as resolveTile(). Within an ulp or so of the winner's plane (the stored value is
+/// rounded to the depth format); frames resolve with resolveTile() instead.
+uint64_t resolveStoredDepth(const Bins& bins, int tile, const DepthSetup& depth, const TileScratch& scratch,
+                            Frame& frame, int rowBegin = 0, int rowEnd = kTileSize);
+
 /// Makes the calling thread's resolveTile() writes visible to other threads (a store fence).
 void finishResolves();
 
@@ -429,7 +435,7 @@ void finishResolves();
 /// lines. The writing thread calls finishResolves() before another thread reads `to`.
 void storeTile(const TileScratch& from, const DepthSetup& depth, KeptTile& to);
 /// The inverse: `to` as the kernel left `from` in rasterizeTile (depth; ids are not kept), for
-/// resolveTile(DepthOnly).
+/// resolveStoredDepth().
 void loadTile(const KeptTile& from, const DepthSetup& depth, TileScratch& to);
 
 /// Queries on a tile kept by storeTile (the occlusion buffer keeps one per screen tile). Its
