@@ -17,6 +17,7 @@ struct Scene;
 enum class BspHeuristic : uint8_t {
   First,   // the first polygon of the node's list (face order)
   Scored,  // the best of up to kBspCandidates evenly spaced candidates (BspTree::build)
+  Area,    // half Scored's candidates, half the largest polygons; splits weighted by area (the default)
 };
 inline constexpr int kBspCandidates = 8;
 /// The scored heuristic counts a candidate's splits over at most this many polygons of the list,
@@ -24,7 +25,7 @@ inline constexpr int kBspCandidates = 8;
 inline constexpr int kBspScoreSample = 1024;
 
 struct BspBuildOptions {
-  BspHeuristic heuristic = BspHeuristic::Scored;
+  BspHeuristic heuristic = BspHeuristic::Area;
   uint64_t maxFragments = 4'000'000;  // build() throws InputError rather than make more
 };
 

@@ -6,6 +6,7 @@
 #include <hsr/scene.hpp>
 
 #include <memory>
+#include <string>
 
 #include "algorithms/algorithms.hpp"
 #include "algorithms/draw.hpp"
@@ -144,7 +145,10 @@ void addFragmentFaces(const Scene& scene, BspDrawing::Built& built) {
 
 BspBuildOptions buildOptionsOf(const AlgorithmParams& params) {
   BspBuildOptions build;
-  build.heuristic = params.text("heuristic") == "first" ? BspHeuristic::First : BspHeuristic::Scored;
+  const std::string heuristic = params.text("heuristic");
+  build.heuristic = heuristic == "first"   ? BspHeuristic::First
+                    : heuristic == "scored" ? BspHeuristic::Scored
+                                            : BspHeuristic::Area;
   build.maxFragments = uint64_t(params.integer("max-fragments"));
   return build;
 }
@@ -174,11 +178,13 @@ AlgorithmInfo bspAlgorithm() {
   a.summary = "BSP tree: polygons split by their own planes once per scene, painted back to front from the eye";
   a.source = "KTH report, KTH thesis";
   a.params = {
-      {"heuristic", ParamType::Choice, "scored", {"scored", "first"}, -1e300, 1e300,
+      {"heuristic", ParamType::Choice, "area", {"area", "scored", "first"}, -1e300, 1e300,
        "the splitting plane of a node, through one of its polygons: first: the first polygon of its list (face "
        "order); scored: of c = min(m, 8) candidates at positions i*m/c of its m polygons, the one that splits "
        "the fewest of the polygons at positions j*m/s (s = min(m, 1024)), ties broken by the least "
-       "|front - back| of those, then by the earliest position"},
+       "|front - back| of those, then by the earliest position; area: as scored, but of h = ceil(c/2) candidates "
+       "at positions i*m/h and the c - h largest polygons, each split of a polygon of area a by a candidate of "
+       "area A counted 1 + 4a/A"},
       {"max-fragments", ParamType::Int, "4000000", {}, 1, 1e9,
        "the most fragments the tree may hold: a build that would make more stops with an error"},
       drawRasterParam("binned"),

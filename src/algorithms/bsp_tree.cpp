@@ -11,6 +11,7 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <tuple>
 
 #include "algorithms/polygon_split.hpp"
 
@@ -29,7 +30,14 @@ struct WorkPolygon {
   uint32_t first = 0, count = 0;
   uint32_t face = 0, triangle = 0;
   uint32_t plane = 0;  // index into Builder::planes: the plane of the input polygon it came from
+  double area = 0;
 };
+
+double areaOf(std::span<const dvec3> v) {
+  dvec3 sum{0.0};
+  for (size_t i = 1; i + 1 < v.size(); ++i) sum += glm::cross(v[i] - v[0], v[i + 1] - v[0]);
+  return 0.5 * glm::length(sum);
+}
 
 // Bytes the builder holds per fragment (its polygon, vertices, plane and list entries), from the
 // peak resident size of a build that reached 4 million fragments (1.48 GB).
@@ -85,6 +93,7 @@ void Builder::addPolygon(std::span<const dvec3> vertices, const SplitPlane& plan
   p.face = face;
   p.triangle = triangle;
   p.plane = uint32_t(planes_.size());
+  p.area = areaOf(vertices);
   planes_.push_back(plane);
   pool_.insert(pool_.end(), vertices.begin(), vertices.end());
   polygons_.push_back(p);
@@ -104,33 +113,64 @@ void Builder::addInputPolygons() {
   checkMemoryFor(inputs_);
 }
 
-// The position in `list` of the splitting polygon (BspHeuristic): for Scored, candidates at
-// positions i m / c (c = min(m, kBspCandidates)), each scored against the polygons at positions
-// j m / s (s = min(m, kBspScoreSample)): fewest splits, then least |front - back|, then earliest.
+// 64 a / A in whole units, bounded (A may be 0: a sliver the sampling met).
+uint64_t splitWeight(double a, double A) {
+  if (!(a > 0)) return 0;
+  return A > 0 ? uint64_t(std::min(64.0 * a / A, 1e12)) : uint64_t(1e12);
+}
+
+// The position in `list` of the splitting polygon (BspHeuristic). Scored: candidates at positions
+// i m / c (c = min(m, kBspCandidates)), each scored by the polygons it splits among those at
+// positions j m / s (s = min(m, kBspScoreSample)). Area: half the candidates so spaced and half
+// the largest polygons, each split weighted 1 + 4 a / A (a the split polygon's area, A the candidate's): a
+// large polygon left for later is cut by many planes, and a split of a small one by a large
+// one's plane costs little. Then the least |front - back|, then the earliest position.
 uint32_t Builder::chooseSplitter(const std::vector<uint32_t>& list) const {
   const size_t m = list.size();
   if (options_.heuristic == BspHeuristic::First || m <= 2) return 0;
+  const bool byArea = options_.heuristic == BspHeuristic::Area;
   const size_t c = std::min<size_t>(m, kBspCandidates), s = std::min<size_t>(m, kBspScoreSample);
+  // Area: half the candidates evenly spaced, half the largest, so a node costs what Scored's does.
+  const size_t spaced = byArea ? (c + 1) / 2 : c;
+  std::vector<size_t> candidates;
+  for (size_t i = 0; i < spaced; ++i) candidates.push_back(i * m / spaced);
+  if (byArea) {
+    std::vector<size_t> largest;  // positions, largest first (a linear scan keeping the top few)
+    for (size_t i = 0; i < m; ++i) {
+      const double area = polygons_[list[i]].area;
+      if (largest.size() == c - spaced && !(area > polygons_[list[largest.back()]].area)) continue;
+      auto at = largest.begin();
+      while (at != largest.end() && polygons_[list[*at]].area >= area) ++at;
+      largest.insert(at, i);
+      if (largest.size() > c - spaced) largest.pop_back();
+    }
+    for (size_t i : largest)
+      if (std::find(candidates.begin(), candidates.end(), i) == candidates.end()) candidates.push_back(i);
+  }
+  // A split's cost in 16ths, so that the weights compare as integers.
   uint32_t best = 0;
-  uint64_t bestSplits = UINT64_MAX, bestImbalance = UINT64_MAX;
-  for (size_t i = 0; i < c; ++i) {
-    const size_t at = i * m / c;
-    const SplitPlane& plane = planes_[polygons_[list[at]].plane];
-    uint64_t splits = 0, front = 0, back = 0;
-    for (size_t j = 0; j < s && splits <= bestSplits; ++j) {
+  uint64_t bestCost = UINT64_MAX, bestImbalance = UINT64_MAX;
+  for (const size_t at : candidates) {
+    const WorkPolygon& candidate = polygons_[list[at]];
+    const SplitPlane& plane = planes_[candidate.plane];
+    uint64_t cost = 0, front = 0, back = 0;
+    for (size_t j = 0; j < s && cost <= bestCost; ++j) {
       const size_t k = j * m / s;
       if (k == at) continue;
-      switch (classifyPolygon(verticesOf(polygons_[list[k]]), plane, epsilon_)) {
+      const WorkPolygon& other = polygons_[list[k]];
+      switch (classifyPolygon(verticesOf(other), plane, epsilon_)) {
         case PolygonSide::Front: ++front; break;
         case PolygonSide::Back: ++back; break;
-        case PolygonSide::Spanning: ++splits; break;
+        case PolygonSide::Spanning:
+          cost += byArea ? 16 + splitWeight(other.area, candidate.area) : 16;
+          break;
         case PolygonSide::Coplanar: break;
       }
     }
     const uint64_t imbalance = front > back ? front - back : back - front;
-    if (splits < bestSplits || (splits == bestSplits && imbalance < bestImbalance)) {
+    if (std::tie(cost, imbalance, at) < std::tie(bestCost, bestImbalance, best)) {
       best = uint32_t(at);
-      bestSplits = splits;
+      bestCost = cost;
       bestImbalance = imbalance;
     }
   }
@@ -141,6 +181,7 @@ uint32_t Builder::addPiece(const std::vector<dvec3>& vertices, const WorkPolygon
   WorkPolygon p = from;
   p.first = uint32_t(pool_.size());
   p.count = uint32_t(vertices.size());
+  p.area = areaOf(vertices);
   pool_.insert(pool_.end(), vertices.begin(), vertices.end());
   polygons_.push_back(p);
   return uint32_t(polygons_.size() - 1);

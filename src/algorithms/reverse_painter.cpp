@@ -31,7 +31,7 @@ class ReversePainter final : public SceneAlgorithm {
   }
 
  private:
-  BspDrawing tree_{BspBuildOptions{}};  // order=bsp: the scored heuristic's tree, built at the first frame
+  BspDrawing tree_{BspBuildOptions{}};  // order=bsp: the default heuristic's tree, built at the first frame
 };
 
 }  // namespace
@@ -42,7 +42,7 @@ AlgorithmInfo reversePainterAlgorithm() {
   a.summary = "reverse painter's: faces front to back, each pixel written once, no depth buffer, stops when full";
   a.source = "Java chapter";
   a.params = {{"order", ParamType::Choice, "bsp", {"bsp", "centroid", "max", "min", "mean-vertex"}, -1e300, 1e300,
-               "the front-to-back order: the BSP tree's (exact; the scored heuristic, built once per scene), "
+               "the front-to-back order: the BSP tree's (exact; the default heuristic, area, built once per scene), "
                "or faces sorted nearest first by their area centroid, farthest vertex, nearest vertex, or the mean "
                "of their vertices"},
               drawRasterParam("binned")};
