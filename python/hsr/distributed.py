@@ -248,6 +248,7 @@ class IndexAppender:
 SCENES = collections.OrderedDict()  # (scene, file stamp) -> hsr.Scene, in this worker process
 SCENES_KEPT = 2
 SCENES_LOCK = threading.Lock()
+SCENE_LOADS = collections.Counter()  # scene -> times this process loaded it (tests check "once")
 
 
 def cached_scene(scene, stamp):
@@ -256,6 +257,7 @@ def cached_scene(scene, stamp):
     with SCENES_LOCK:
         if key not in SCENES:
             SCENES[key] = hsr.load(scene)
+            SCENE_LOADS[scene] += 1
             while len(SCENES) > SCENES_KEPT:
                 SCENES.popitem(last=False)
         SCENES.move_to_end(key)

@@ -6,6 +6,7 @@ import logging
 import os
 import signal
 import subprocess
+import sys
 import threading
 import time
 
@@ -106,6 +107,19 @@ def test_views_per_task_and_worker_count_do_not_change_the_bytes(client, tmp_pat
         assert index_lines(folder) == index_lines(folders[0]), folder
     assert len(files_of(folders[0])) == 9 * len(OUTPUTS) and len(index_lines(folders[0])) == 9
     check_against_single_process(folders[0], "builtin:cubes", cameras, ids)
+
+
+def test_each_worker_loads_the_scene_once(client, tmp_path):
+    scene = "builtin:sphere?n=3000"
+
+    def loads():
+        return client.run(lambda: dict(__import__("hsr.distributed").distributed.SCENE_LOADS).get(scene, 0))
+
+    before = loads()
+    hd.render_views(client, scene, orbit(24), tmp_path / "out", views_per_task=2)
+    after = loads()
+    assert sum(after.values()) - sum(before.values()) >= 1
+    assert all(after[worker] - before.get(worker, 0) <= 1 for worker in after), (before, after)
 
 
 def test_resume_renders_only_what_is_missing_or_damaged(client, tmp_path):
@@ -212,3 +226,12 @@ def test_an_error_in_a_task_is_raised_and_finished_views_are_indexed(client, tmp
     with pytest.raises(ValueError, match="near"):
         hd.render_views(client, "builtin:cubes", cameras, tmp_path / "out", views_per_task=4)
     assert [json.loads(line)["id"] for line in index_lines(tmp_path / "out")] == [f"view-{k:06d}" for k in range(4)]
+
+
+def test_the_manuals_example_runs(tmp_path):
+    example = os.path.join(os.path.dirname(__file__), "..", "examples", "dask_views.py")
+    for expected in ("100 views rendered, 0 complete already", "0 views rendered, 100 complete already"):
+        done = subprocess.run([sys.executable, example],
+                              cwd=tmp_path, capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0 and expected in done.stdout, done.stdout + done.stderr
+    assert len(index_lines(tmp_path / "out")) == 100 and len(files_of(tmp_path / "out")) == 200
