@@ -116,7 +116,8 @@ def main():
                 os.makedirs(out)
                 seconds[name].append(timed(lambda: run(out)))
                 # Every way writes the same bytes.
-                files = {n: hd.sha256_of_file(os.path.join(out, n)) for n in sorted(os.listdir(out)) if n.endswith(".npy")}
+                names = sorted(n for n in os.listdir(out) if n.endswith(".npy"))
+                files = {n: hd.sha256_of_file(os.path.join(out, n)) for n in names}
                 reference = reference or files
                 assert files == reference and len(files) == len(cameras) * len(outputs), name
                 bytes_per_view = sum(os.path.getsize(os.path.join(out, n)) for n in files) / len(cameras)
@@ -143,7 +144,8 @@ def main():
     print("\n| Dask's cost per task | tasks/s | ms per task |\n|---|---|---|")
     for n, rate in rates.items():
         print(f"| no-op tasks, {n} worker(s) | {rate:.0f} | {1000 / rate:.2f} |")
-    print(f"| render_views, 1 view/task against {per_task}: extra time x 2 workers / extra tasks | | {1000 * slope:.1f} |")
+    print(f"| render_views, 1 view/task against {per_task}: extra time x 2 workers / extra tasks | "
+          f"| {1000 * slope:.1f} |")
 
     # Model: 100 workers of one core, each as fast as the best 1-worker run here, capped by the
     # scheduler's task rate (the no-op rate with 2 workers here, where scheduler, client and workers
@@ -156,7 +158,8 @@ def main():
     for gbytes in map(float, args.fs_gbytes_per_s.split(",")):
         fs = gbytes * 1e9 / bytes_per_view
         print(f"| file system: {gbytes:g} GB/s / {bytes_per_view / 1e6:.2f} MB per view | {fs:.0f} |")
-        print(f"| **throughput with {gbytes:g} GB/s (the least)** | **{min(fs, workers * per_worker, rates[2] * per_task):.0f}** |")
+        least = min(fs, workers * per_worker, rates[2] * per_task)
+        print(f"| **throughput with {gbytes:g} GB/s (the least)** | **{least:.0f}** |")
     print("\n" + json.dumps({"seconds": seconds, "noop_tasks_per_s": rates, "bytes_per_view": bytes_per_view}))
 
 

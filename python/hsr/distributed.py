@@ -265,11 +265,11 @@ def cached_scene(scene, stamp):
 
 
 def render_task(scene, stamp, out_dir, settings, views):
-    """Renders one task's views (id, camera, files, digest, index candidates); returns per view
-    (id, files, rendered). A view whose recorded files verify is not rendered again."""
+    """Renders one task's views (id, camera, files, index candidates); returns per view (id, files,
+    rendered). A view whose recorded files verify is not rendered again."""
     results = {}
     todo = []
-    for view_id, camera, files, digest, found in views:
+    for view_id, camera, files, found in views:
         complete = next((c for c in found if verified(out_dir, c)), None)
         if complete is not None:
             results[view_id] = (complete, False)
@@ -288,10 +288,11 @@ def render_task(scene, stamp, out_dir, settings, views):
         for i, (view_id, _, files) in enumerate(group):
             records = []
             for output, name in files:
-                size, sha = write_npy(os.path.join(out_dir, name), out[output][i].astype(NPY_OUTPUTS[output], copy=False))
+                array = out[output][i].astype(NPY_OUTPUTS[output], copy=False)
+                size, sha = write_npy(os.path.join(out_dir, name), array)
                 records.append({"output": output, "file": name, "bytes": size, "sha256": sha})
             results[view_id] = (records, True)
-    return [(view_id, *results[view_id]) for view_id, _, _, _, _ in views]
+    return [(view_id, *results[view_id]) for view_id, _, _, _ in views]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -334,7 +335,7 @@ def render_views(client, scene, cameras, out_dir, outputs=("depth", "face_id"), 
     remove_temporaries(out_dir, views)
     tasks = [views[i:i + views_per_task] for i in range(0, len(views), views_per_task)]
     futures = [client.submit(render_task, scene, stamp, out_dir, settings,
-                             [(v.id, v.camera, v.files, v.digest, candidates(v, by_id)) for v in task], pure=False)
+                             [(v.id, v.camera, v.files, candidates(v, by_id)) for v in task], pure=False)
                for task in tasks]
     task_of = {f.key: k for k, f in enumerate(futures)}
 
