@@ -47,6 +47,7 @@ def index_lines(folder, name=hd.INDEX_FILE):
 def check_against_single_process(folder, scene_name, cameras, ids):
     """Every file holds hsr.render's array of its view, rendered here in one process and one call."""
     out = hsr.render(hsr.load(scene_name), cameras, outputs=OUTPUTS, threads=1)
+    assert all((ids >= 0).any() and (ids < 0).any() for ids in out["face_id"])  # no view empty or all one surface
     for k, view_id in enumerate(ids):
         for name in OUTPUTS:
             saved = np.load(os.path.join(folder, f"{view_id}.{name}.npy"))
@@ -85,7 +86,7 @@ def test_views_per_task_and_worker_count_do_not_change_the_bytes(client, tmp_pat
     K = np.array([[80.0, 0, 47.5], [0, 80.0, 35.5], [0, 0, 1]])
     poses = []
     for a in np.linspace(0.0, 2 * np.pi, 9, endpoint=False):  # OpenCV poses on a circle, looking at the origin
-        eye = np.array([5 * np.cos(a), 2.0, 5 * np.sin(a)])
+        eye = np.array([9 * np.cos(a), 2.0, 9 * np.sin(a)])
         z = -eye / np.linalg.norm(eye)
         x = np.cross(z, [0.0, -1.0, 0.0])
         x /= np.linalg.norm(x)
