@@ -1,4 +1,4 @@
-// The `hsr` Python module: scenes (hsr.load, Scene.from_arrays), cameras (OpenCV, look-at,
+// The `hsr` Python package's extension `hsr._hsr` (python/hsr/__init__.py re-exports it): scenes (hsr.load, Scene.from_arrays), cameras (OpenCV, look-at,
 // orthographic, camera JSON) and hsr.render into NumPy arrays. docs/python.md is its manual.
 #include "common.hpp"
 
@@ -264,14 +264,21 @@ near and far (fitted to the scene when not given), orthographic, width, height.)
       })
       .def_property_readonly("near", [](const PyCamera& c) { return optionalOf(c.spec.near); })
       .def_property_readonly("far", [](const PyCamera& c) { return optionalOf(c.spec.far); })
-      .def("__repr__", &cameraRepr);
+      .def("__repr__", &cameraRepr)
+      // Pickled as its camera JSON and size (exact: the JSON's numbers round-trip), so that cameras
+      // travel to other processes (multiprocessing, hsr.distributed on Dask).
+      .def(py::pickle([](const PyCamera& c) { return py::make_tuple(hsr::cameraSpecToJson(c.spec), c.width, c.height); },
+                      [](const py::tuple& state) {
+                        if (state.size() != 3) valueError("hsr.Camera: bad pickled state");
+                        return cameraFromJson(state[0].cast<std::string>(), state[1].cast<int>(), state[2].cast<int>());
+                      }));
 }
 
 }  // namespace
 
 }  // namespace hsrpy
 
-PYBIND11_MODULE(hsr, m) {
+PYBIND11_MODULE(_hsr, m) {
   using namespace hsrpy;
   m.doc() = "hsr: exact depth, face-id, instance and barycentric images of meshes on the CPU (docs/python.md).";
   m.attr("__version__") = HSR_VERSION;

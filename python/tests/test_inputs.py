@@ -140,6 +140,26 @@ def test_camera_json_round_trip(cubes):
     assert a["depth"].tobytes() == b["depth"].tobytes()
 
 
+def test_cameras_pickle_exactly(cubes):
+    import pickle
+    K = np.array([[151.3, 0.2, 71.31], [0.0, 190.7, 66.8], [0.0, 0.0, 1.0]])
+    pose = np.eye(4)
+    pose[:3, :3] = np.linalg.qr(np.random.default_rng(5).normal(size=(3, 3)))[0] * [1, 1, -1]
+    pose[:3, :3] *= np.sign(np.linalg.det(pose[:3, :3]))
+    pose[:3, 3] = [0.1, -0.2, 6.0 + 1e-9]
+    cameras = [hsr.Camera.opencv(K, pose, 160, 120, near=0.1, far=1 / 3 * 100),
+               hsr.Camera.look_at((4.1, 3.3, 5.7), (0.1, 0, 0), 161, 119, fovy_deg=47.3),
+               hsr.Camera.orthographic((3, 4, 5), (0, 0, 0), 6.0, 100, 80, up=(0, 0, 1)),
+               cubes.default_camera(90, 70)]
+    for camera in cameras:
+        copy = pickle.loads(pickle.dumps(camera))
+        assert type(copy) is hsr.Camera and repr(copy) == repr(camera)
+        assert (copy.width, copy.height, copy.to_json()) == (camera.width, camera.height, camera.to_json())
+        for name, value in camera.resolve(cubes).items():
+            assert np.array_equal(copy.resolve(cubes)[name], value), name
+        assert hsr.render(cubes, copy)["depth"].tobytes() == hsr.render(cubes, camera)["depth"].tobytes()
+
+
 def test_render_refuses_bad_arguments(cubes, cli):
     cam = cubes.default_camera(64, 48)
     with pytest.raises(ValueError, match="outputs: unknown 'zdepth'"):
