@@ -5,9 +5,12 @@
       `hsr render` and `mpirun -n RANKS hsr-mpi render` with the same flags write the same bytes
       (ids, depth, colour), and hsr-mpi's --verify finds no wrong pixel. With --expect-empty-rank
       among the flags (taken out before running), some rank must have had no triangles.
-  mpi_check.py fails HSR HSR_MPI MPIRUN RANKS EXPECTED SCENE [FLAG ...]
-      hsr-mpi ends with exit status 2, exactly one line on stderr (containing EXPECTED), no
-      output file, and well within the test's timeout (no rank waits forever).
+  mpi_check.py fails HSR HSR_MPI MPIRUN RANKS STATUS EXPECTED SCENE [FLAG ...]
+      hsr-mpi ends with exit status STATUS (2: bad input, 1: an output not written), exactly one
+      line on stderr (containing EXPECTED), no output file, and well within the test's timeout
+      (no rank waits forever).
+
+--composite MODE is hsr-mpi's alone: it is passed to hsr-mpi only.
 """
 import json
 import os
@@ -35,6 +38,10 @@ def fail(message):
 def same(hsr, hsr_mpi, mpirun, ranks, scene, flags):
     expect_empty = "--expect-empty-rank" in flags
     flags = [f for f in flags if f != "--expect-empty-rank"]
+    mpi_flags = []
+    if "--composite" in flags:
+        at = flags.index("--composite")
+        mpi_flags, flags = flags[at:at + 2], flags[:at] + flags[at + 2:]
     with tempfile.TemporaryDirectory() as tmp:
         outs = {}
         for name in ("one", "many"):
@@ -46,7 +53,8 @@ def same(hsr, hsr_mpi, mpirun, ranks, scene, flags):
         if one.returncode != 0:
             fail(f"hsr render exited {one.returncode}: {one.stderr}")
         stats = os.path.join(tmp, "many", "stats.json")
-        many = mpi(mpirun, ranks, hsr_mpi, [scene] + flags + files(outs["many"]) + ["--verify", "--stats", stats, "--verbose"])
+        many = mpi(mpirun, ranks, hsr_mpi,
+                   [scene] + flags + mpi_flags + files(outs["many"]) + ["--verify", "--stats", stats, "--verbose"])
         if many.returncode != 0:
             fail(f"hsr-mpi exited {many.returncode}: {many.stderr}")
         for k in ("ids.npy", "depth.npy", "color.png"):
@@ -69,13 +77,13 @@ def same(hsr, hsr_mpi, mpirun, ranks, scene, flags):
               f" {len(empty)} empty ranks; {s['zbuffer']['mpi_bytes_sent']} bytes sent")
 
 
-def fails(hsr, hsr_mpi, mpirun, ranks, expected, scene, flags):
+def fails(hsr, hsr_mpi, mpirun, ranks, status, expected, scene, flags):
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "depth.npy")
         r = mpi(mpirun, ranks, hsr_mpi, [scene, "--depth", out] + flags)
         lines = r.stderr.splitlines()
-        if r.returncode != 2:
-            fail(f"exit status {r.returncode}, not 2; stderr:\n{r.stderr}")
+        if r.returncode != status:
+            fail(f"exit status {r.returncode}, not {status}; stderr:\n{r.stderr}")
         if len(lines) != 1 or not lines[0].startswith("hsr-mpi: ") or expected not in lines[0]:
             fail(f"expected one line 'hsr-mpi: ...{expected}...', got {len(lines)}:\n{r.stderr}")
         if os.listdir(tmp):
@@ -88,7 +96,7 @@ def main(argv):
     if mode == "same":
         same(hsr, hsr_mpi, mpirun, ranks, argv[6], argv[7:])
     elif mode == "fails":
-        fails(hsr, hsr_mpi, mpirun, ranks, argv[6], argv[7], argv[8:])
+        fails(hsr, hsr_mpi, mpirun, ranks, int(argv[6]), argv[7], argv[8], argv[9:])
     else:
         fail("unknown mode " + mode)
 
