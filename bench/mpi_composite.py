@@ -2,10 +2,11 @@
 """hsr-mpi's render and composite per rank, and the bytes each rank sends, as a markdown table.
 
   python3 bench/mpi_composite.py [--hsr-mpi build/hsr-mpi] [--ranks 1,2,4,8] [--size 1920x1080]
-                                 [--scenes builtin:city,builtin:sphere] [--modes sparse,dense]
+                                 [--scenes builtin:city,builtin:sphere] [--modes sparse,dense] [--repeat 3]
 
 Each run is `mpirun -q --oversubscribe -n K hsr-mpi render SCENE --size WxH --threads 1 --depth
-FILE --verbose` (one thread per rank); the figures are hsr-mpi's own per-rank lines. On a machine
+FILE --verbose` (one thread per rank); the figures are hsr-mpi's own per-rank lines, each the
+least of --repeat runs. On a machine
 with fewer cores than ranks the ranks share the cores: the CPU time of a rank's render and the
 bytes are what carries over to a cluster, the wall times are not. Then the cost model of
 docs/distributed.md, extrapolated to 1,000 ranks and 64 megapixels.
@@ -20,7 +21,7 @@ import tempfile
 import time
 
 RANK = re.compile(r"rank (\d+): triangles (\d+), covers (\d+)x(\d+), render ([\d.]+) ms \(([\d.]+) ms CPU\), "
-                  r"stored depth ([\d.]+) ms, composite ([\d.]+) ms, sent (\d+) bytes")
+                  r"stored depth ([\d.]+) ms, waited ([\d.]+) ms, composite ([\d.]+) ms, sent (\d+) bytes")
 
 
 def run(hsr_mpi, mpirun, ranks, scene, size, mode, out):
@@ -37,20 +38,22 @@ def run(hsr_mpi, mpirun, ranks, scene, size, mode, out):
     return rows, wall
 
 
-def model(ranks, pixels, bytes_per_pixel, latency, bandwidth):
-    """Seconds to composite `pixels` over `ranks` by three schemes (latency + bytes/bandwidth per
-    message, a rank's messages one after another): binary swap, direct send, reduce-scatter."""
-    image = pixels * bytes_per_pixel
-    stages = math.ceil(math.log2(ranks))
-    # Binary swap: log2 K rounds, each exchanging half of what a rank holds: (1 - 1/K) of the image.
-    swap = stages * latency + image * (1 - 1 / ranks) / bandwidth
-    # Direct send, dense: K - 1 messages of 1/K of the image each.
-    direct = (ranks - 1) * latency + image * (1 - 1 / ranks) / bandwidth
-    # Reduce-scatter (recursive halving for large messages, as MPICH and OpenMPI pick): as binary swap.
-    reduce_scatter = stages * latency + image * (1 - 1 / ranks) / bandwidth
-    # The gather of the final image to one rank: K - 1 strips arrive at rank 0's link.
-    gather = (ranks - 1) * latency + image * (1 - 1 / ranks) / bandwidth
-    return swap, direct, reduce_scatter, gather
+SAMPLE, PIXEL = 24, 16  # bytes: a composited Sample (key and payload), a gathered Pixel (payload)
+
+
+def model(ranks, pixels, latency, bandwidth, coverage=1.0):
+    """Seconds per stage on one rank's link (latency per message + bytes / bandwidth, messages one
+    after another; reduction arithmetic and contention left out):
+      binary swap:    log2 K rounds, each exchanging half of what a rank holds
+      direct send:    K - 1 messages of 1/K of the image each (sparse: `coverage` of them carry data)
+      reduce-scatter: MPI's recursive halving for a commutative operator: as binary swap
+      gather:         the K - 1 other strips arriving at rank 0's link."""
+    share = pixels * (1 - 1 / ranks)
+    rounds = math.ceil(math.log2(ranks)) if ranks > 1 else 0
+    swap = rounds * latency + SAMPLE * share / bandwidth
+    direct = (ranks - 1) * latency + coverage * SAMPLE * share / bandwidth
+    gather = (ranks - 1) * latency + PIXEL * share / bandwidth
+    return swap, direct, swap, gather
 
 
 def main():
@@ -61,6 +64,7 @@ def main():
     p.add_argument("--size", default="1920x1080")
     p.add_argument("--scenes", default="builtin:city,builtin:sphere")
     p.add_argument("--modes", default="sparse,dense")
+    p.add_argument("--repeat", type=int, default=3, help="runs of each case; each figure is its least over them")
     a = p.parse_args()
     print(f"date: {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
           f"commit: {subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], capture_output=True, text=True).stdout.strip()}")
@@ -73,22 +77,29 @@ def main():
         for scene in a.scenes.split(","):
             for k in [int(x) for x in a.ranks.split(",")]:
                 for mode in a.modes.split(","):
-                    rows, wall = run(a.hsr_mpi, a.mpirun, k, scene, a.size, mode, os.path.join(tmp, "d.npy"))
+                    runs = [run(a.hsr_mpi, a.mpirun, k, scene, a.size, mode, os.path.join(tmp, "d.npy"))
+                            for _ in range(a.repeat)]
+                    rows = [[min(field) for field in zip(*rank)] for rank in zip(*(r[0] for r in runs))]
+                    wall = min(r[1] for r in runs)
                     cpu = [r[5] for r in rows]
                     rect = max(r[2] * r[3] for r in rows) / 1e6
-                    sent = [r[8] for r in rows]
+                    sent = [r[9] for r in rows]
                     print(f"| {scene} | {k} | {mode} | {max(cpu):.1f} / {sum(cpu):.1f} | {rect:.2f} "
-                          f"| {max(r[6] for r in rows):.1f} | {max(r[7] for r in rows):.1f} "
+                          f"| {max(r[6] for r in rows):.1f} | {max(r[8] for r in rows):.1f} "
                           f"| {max(sent) / 1e6:.1f} | {sum(sent) / 1e6:.1f} | {wall:.2f} |")
 
-    # The model: 24 bytes per pixel (key 8, depth 4, face 4, triangle 4, colour 4), a link of
-    # 1 us latency and 10 GB/s (an InfiniBand-class interconnect), 1,000 ranks, 64 megapixels.
-    print("\nCost model (latency 1 us, 10 GB/s per link, 24 bytes a pixel; one rank's link, messages in sequence):\n")
-    print("| ranks | megapixels | binary swap s | direct send s | reduce-scatter s | gather to rank 0 s |")
-    print("|---|---|---|---|---|---|")
-    for ranks, mpx in ((8, 2.07), (1000, 64), (32768, 64)):
-        s = model(ranks, mpx * 1e6, 24, 1e-6, 10e9)
-        print(f"| {ranks} | {mpx} | {s[0]:.4f} | {s[1]:.4f} | {s[2]:.4f} | {s[3]:.4f} |")
+    # The model on an assumed interconnect: 2 us per message, 10 GB/s per link.
+    latency, bandwidth = 2e-6, 10e9
+    print(f"\nCost model: {latency * 1e6:g} us per message, {bandwidth / 1e9:g} GB/s per link, {SAMPLE} bytes a "
+          f"composited pixel, {PIXEL} gathered; seconds per stage on one rank's link:\n")
+    print("| ranks | megapixels | binary swap | direct send, dense | direct send, 10% covered | reduce-scatter "
+          "| gather to rank 0 | best total |")
+    print("|---|---|---|---|---|---|---|---|")
+    for ranks, mpx in ((8, 2.07), (1000, 2.07), (1000, 64), (32768, 64)):
+        swap, direct, rs, gather = model(ranks, mpx * 1e6, latency, bandwidth)
+        sparse = model(ranks, mpx * 1e6, latency, bandwidth, 0.1)[1]
+        best = min(swap, direct, sparse, rs) + gather
+        print(f"| {ranks} | {mpx} | {swap:.4f} | {direct:.4f} | {sparse:.4f} | {rs:.4f} | {gather:.4f} | {best:.4f} |")
 
 
 if __name__ == "__main__":

@@ -85,7 +85,8 @@ std::vector<Sample> samplesOf(const Frame& frame, const OcclusionBuffer& stored,
       s.face = ids ? frame.faceId[i] : -1;
       s.triangle = triangles ? frame.triangleId[i] : -1;
       s.color = colors ? frame.color[i] : Rgba8{};
-      const double value = stored.storedAt(x, y);
+      // With face ids, a pixel without one is the background; only drawn pixels need the stored value.
+      const double value = ids && s.face < 0 ? clear : stored.storedAt(x, y);
       if (value == clear) {
         s.key = kBackground;
         continue;
@@ -99,7 +100,7 @@ std::vector<Sample> samplesOf(const Frame& frame, const OcclusionBuffer& stored,
 }
 
 CompositeStats composite(const std::vector<Sample>& samples, int width, int height, const Sample& background,
-                         Mode mode, MPI_Comm comm, std::vector<Sample>& image) {
+                         Mode mode, MPI_Comm comm, std::vector<Pixel>& image) {
   const SampleType kType;
   int rank = 0, ranks = 1;
   MPI_Comm_rank(comm, &rank);
@@ -107,18 +108,18 @@ CompositeStats composite(const std::vector<Sample>& samples, int width, int heig
   const auto start = std::chrono::steady_clock::now();
   CompositeStats stats;
   coveredRect(samples, width, height, stats.rect);
-  const size_t pixels = size_t(width) * size_t(height);
+  const size_t pixelCount = size_t(width) * size_t(height);
   std::vector<Sample> strip;  // this rank's part of the image
   const size_t n = size_t(ranks);
   std::vector<int> counts(n), displs(n);
 
   if (mode == Mode::Dense) {
     // Blocks of equal size (the last padded with background): rank r owns pixels [r B, (r+1) B).
-    const size_t block = (pixels + size_t(ranks) - 1) / size_t(ranks);
+    const size_t block = (pixelCount + size_t(ranks) - 1) / size_t(ranks);
     if (block > size_t(std::numeric_limits<int>::max())) throw std::length_error("image too large for one MPI block");
     std::vector<Sample> padded;
     const Sample* send = samples.data();
-    if (block * size_t(ranks) != pixels) {
+    if (block * size_t(ranks) != pixelCount) {
       padded = samples;
       padded.resize(block * size_t(ranks), background);
       send = padded.data();
@@ -180,12 +181,20 @@ CompositeStats composite(const std::vector<Sample>& samples, int width, int heig
     }
   }
 
-  // The strips to rank 0.
+  // The strips to rank 0, without their keys.
+  std::vector<Pixel> pixels(strip.size());
+  std::transform(strip.begin(), strip.end(), pixels.begin(),
+                 [](const Sample& s) { return Pixel{s.depth, s.face, s.triangle, s.color}; });
+  strip = {};
+  MPI_Datatype pixelType;
+  MPI_Type_contiguous(int(sizeof(Pixel)), MPI_BYTE, &pixelType);
+  MPI_Type_commit(&pixelType);
   if (rank == 0) image.resize(size_t(displs.back()) + size_t(counts.back()));
-  MPI_Gatherv(strip.data(), int(strip.size()), kType.type, rank == 0 ? image.data() : nullptr, counts.data(),
-              displs.data(), kType.type, 0, comm);
-  if (rank == 0) image.resize(pixels);
-  if (rank != 0) stats.bytesSent += strip.size() * sizeof(Sample);
+  MPI_Gatherv(pixels.data(), int(pixels.size()), pixelType, rank == 0 ? image.data() : nullptr, counts.data(),
+              displs.data(), pixelType, 0, comm);
+  MPI_Type_free(&pixelType);
+  if (rank == 0) image.resize(pixelCount);
+  if (rank != 0) stats.bytesSent += pixels.size() * sizeof(Pixel);
   stats.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return stats;
 }

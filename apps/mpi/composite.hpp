@@ -21,6 +21,15 @@ struct Sample {
   Rgba8 color;
 };
 static_assert(sizeof(Sample) == 24, "a Sample travels as 24 bytes");
+
+/// A pixel of the composited image as gathered to rank 0: the winner's payload without its key.
+struct Pixel {
+  float depth;
+  int32_t face;
+  int32_t triangle;
+  Rgba8 color;
+};
+static_assert(sizeof(Pixel) == 16, "a Pixel travels as 16 bytes");
 inline constexpr uint64_t kBackground = ~uint64_t(0);
 
 /// The 32 bits of a stored depth value (the format's code or float, as OcclusionBuffer::storedAt
@@ -47,6 +56,6 @@ struct CompositeStats {
 /// (MPI_Alltoallv), the owner keeps the nearest; Dense: MPI_Reduce_scatter_block of whole frames
 /// with a user-defined MPI_Op. Then the strips are gathered to rank 0.
 CompositeStats composite(const std::vector<Sample>& samples, int width, int height, const Sample& background,
-                         Mode mode, MPI_Comm comm, std::vector<Sample>& image);
+                         Mode mode, MPI_Comm comm, std::vector<Pixel>& image);
 
 }  // namespace hsr::mpi

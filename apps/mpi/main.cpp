@@ -96,7 +96,7 @@ void checkCompositable(const cli::RenderFlags& f, const cli::Job& job) {
 
 // Per rank, gathered to rank 0 for --verbose and the statistics.
 struct RankRecord {
-  double faces, triangles, renderMs, renderCpuMs, storedMs, compositeMs, bytesSent, rectWidth, rectHeight;
+  double faces, triangles, renderMs, renderCpuMs, storedMs, waitMs, compositeMs, bytesSent, rectWidth, rectHeight;
 };
 
 // The counters of the ranks' frames that add up to the whole frame's.
@@ -167,7 +167,11 @@ int renderRanks(const cli::RenderFlags& f, const MpiFlags& m, MPI_Comm comm) {
                  comm);
   if (status) return status;
 
-  std::vector<Sample> image;
+  // The ranks wait for the slowest render here, so that the composite's time is its own.
+  const auto waitStart = std::chrono::steady_clock::now();
+  MPI_Barrier(comm);
+  record.waitMs = cli::millisecondsSince(waitStart);
+  std::vector<Pixel> image;
   const CompositeStats cs = composite(samples, job.camera.width, job.camera.height, background,
                                       m.composite == "dense" ? Mode::Dense : Mode::Sparse, comm, image);
   samples = {};
@@ -191,12 +195,12 @@ int renderRanks(const cli::RenderFlags& f, const MpiFlags& m, MPI_Comm comm) {
       frame.allocate(job.camera.width, job.camera.height, job.options.outputs);
       uint64_t covered = 0;
       for (size_t i = 0; i < image.size(); ++i) {
-        const Sample& s = image[i];
-        frame.depth[i] = s.depth;
-        if (!frame.faceId.empty()) frame.faceId[i] = s.face;
-        if (!frame.triangleId.empty()) frame.triangleId[i] = s.triangle;
-        if (!frame.color.empty()) frame.color[i] = s.color;
-        covered += s.key != kBackground;
+        const Pixel& p = image[i];
+        frame.depth[i] = p.depth;
+        if (!frame.faceId.empty()) frame.faceId[i] = p.face;
+        if (!frame.triangleId.empty()) frame.triangleId[i] = p.triangle;
+        if (!frame.color.empty()) frame.color[i] = p.color;
+        covered += p.depth != std::numeric_limits<float>::infinity();
       }
       image = {};
       frame.stats = mine.stats;
@@ -225,9 +229,9 @@ int renderRanks(const cli::RenderFlags& f, const MpiFlags& m, MPI_Comm comm) {
       for (int r = 0; r < ranks; ++r) {
         const RankRecord& x = records[size_t(r)];
         fmt::print("  rank {}: triangles {:.0f}, covers {:.0f}x{:.0f}, render {:.2f} ms ({:.2f} ms CPU), stored depth "
-                   "{:.2f} ms, composite {:.2f} ms, sent {:.0f} bytes\n",
-                   r, x.triangles, x.rectWidth, x.rectHeight, x.renderMs, x.renderCpuMs, x.storedMs, x.compositeMs,
-                   x.bytesSent);
+                   "{:.2f} ms, waited {:.2f} ms, composite {:.2f} ms, sent {:.0f} bytes\n",
+                   r, x.triangles, x.rectWidth, x.rectHeight, x.renderMs, x.renderCpuMs, x.storedMs, x.waitMs,
+                   x.compositeMs, x.bytesSent);
       }
     });
   }
