@@ -96,7 +96,7 @@ void checkCompositable(const cli::RenderFlags& f, const cli::Job& job) {
 
 // Per rank, gathered to rank 0 for --verbose and the statistics.
 struct RankRecord {
-  double faces, triangles, renderMs, renderCpuMs, storedMs, waitMs, compositeMs, bytesSent, rectWidth, rectHeight;
+  double triangles, renderMs, renderCpuMs, storedMs, waitMs, compositeMs, bytesSent, rectWidth, rectHeight;
 };
 
 // The counters of the ranks' frames that add up to the whole frame's.
@@ -128,7 +128,6 @@ int renderRanks(const cli::RenderFlags& f, const MpiFlags& m, MPI_Comm comm) {
   int rank = 0, ranks = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &ranks);
-  const auto start = std::chrono::steady_clock::now();
 
   // Flags and scene, on every rank (only rank 0 writes, so only it checks the output files).
   cli::Job job;
@@ -139,6 +138,7 @@ int renderRanks(const cli::RenderFlags& f, const MpiFlags& m, MPI_Comm comm) {
                      }),
                      comm);
   if (status) return status;
+  const auto start = std::chrono::steady_clock::now();  // the summary's wall time, as hsr render's
 
   // This rank's share, rendered over the full frame with its stored depth.
   SceneRange part;
@@ -175,7 +175,6 @@ int renderRanks(const cli::RenderFlags& f, const MpiFlags& m, MPI_Comm comm) {
   const CompositeStats cs = composite(samples, job.camera.width, job.camera.height, background,
                                       m.composite == "dense" ? Mode::Dense : Mode::Sparse, comm, image);
   samples = {};
-  record.faces = double(part.scene.faceCount());
   record.triangles = double(part.scene.triangles.size());
   record.compositeMs = cs.ms;
   record.bytesSent = double(cs.bytesSent);
