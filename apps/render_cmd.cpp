@@ -1,6 +1,7 @@
 // `hsr render`: one frame of a scene, written to colour, face-id, depth and attribute files (all or
 // none), with statistics as a summary or JSON; optionally shadowed and verified against the exact
-// reference. Set up by the subcommand table in apps/main.cpp (docs/cli.md "hsr render").
+// reference. Set up by the subcommand table in apps/main.cpp (docs/cli.md "hsr render"); its steps
+// are shared with hsr-mpi (render_cmd.hpp, apps/mpi/main.cpp).
 #include <hsr/hsr.hpp>
 #include <hsr/threads.hpp>
 
@@ -136,7 +137,7 @@ void checkRenderFlags(const RenderFlags& f, bool writes) {
   if (f.shadows && !has(kept, hsr::FrameOutputs::TriangleIds))
     throw InputError("--shadows finds each pixel's point on its triangle: the outputs kept (" +
                      hsr::frameOutputsName(kept) + ") have no triangle ids (add triangle)");
-  flagLight(f);
+  flagLight(f);  // its errors before the scene loads; finishRender uses the light
   if (f.shadows) hsr::checkShadowOptions(f.shadowOptions);
   if (writes && !f.svg.empty()) hsr::checkSvgPath(f.svg);
 }
@@ -198,7 +199,6 @@ int finishRender(const RenderFlags& f, const Job& job, hsr::Frame& frame,
   }
   return 0;
 }
-
 
 void declareRenderFlags(CLI::App& cmd, RenderFlags* f) {
   f->view.declare(cmd);
