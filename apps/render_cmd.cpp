@@ -1,6 +1,7 @@
 // `hsr render`: one frame of a scene, written to colour, face-id, depth and attribute files (all or
 // none), with statistics as a summary or JSON; optionally shadowed and verified against the exact
-// reference. Set up by the subcommand table in apps/main.cpp (docs/cli.md "hsr render").
+// reference. Set up by the subcommand table in apps/main.cpp (docs/cli.md "hsr render"); its steps
+// are shared with hsr-mpi (render_cmd.hpp, apps/mpi/main.cpp).
 #include <hsr/hsr.hpp>
 #include <hsr/threads.hpp>
 
@@ -12,23 +13,10 @@
 #include <optional>
 
 #include "commands.hpp"
-#include "flags.hpp"
-#include "output_set.hpp"
+#include "render_cmd.hpp"
 
 namespace hsr::cli {
 namespace {
-
-struct RenderFlags {
-  ViewFlags view;
-  std::string out, ids, depth, depthImage, overdrawImage, stats, svg;
-  std::string instanceIds, barycentric;  // attributes resolved from the ids (hsr/views.hpp)
-  bool verify = false, quiet = false, json = false;
-  std::vector<hsr::cli::OutputFlag> outputFlags;  // every output flag, checked as a set
-  // --shadows (docs/shadows.md): the light from the flags, else the scene's, else the default.
-  bool shadows = false;
-  std::string lightDir, lightPos;
-  hsr::ShadowOptions shadowOptions;
-};
 
 // The light --light-dir or --light-pos give (checked before the scene loads), if any.
 std::optional<hsr::Light> flagLight(const RenderFlags& f) {
@@ -103,22 +91,38 @@ void writeAttributeOutputs(const RenderFlags& f, const Job& job, const hsr::Fram
   }
 }
 
+// The output files and their writers, in the order they are written.
+struct Output {
+  const std::string& path;  // empty: not requested
+  hsr::OutputKind kind;
+  void (*write)(const hsr::Frame&, const std::string&);
+};
+std::vector<Output> outputsOf(const RenderFlags& f) {
+  return {{f.out, hsr::OutputKind::Color, hsr::writeColorPng},
+          {f.ids, hsr::OutputKind::FaceIds, hsr::writeFaceIds},
+          {f.depth, hsr::OutputKind::Depth, hsr::writeDepth},
+          {f.depthImage, hsr::OutputKind::DepthImage, hsr::writeDepthImage},
+          {f.overdrawImage, hsr::OutputKind::OverdrawImage, hsr::writeOverdrawImage}};
+}
+
 int runRender(const RenderFlags& f) {
-  struct Output {
-    const std::string& path;  // empty: not requested
-    hsr::OutputKind kind;
-    void (*write)(const hsr::Frame&, const std::string&);
-  };
-  const Output outputs[] = {{f.out, hsr::OutputKind::Color, hsr::writeColorPng},
-                            {f.ids, hsr::OutputKind::FaceIds, hsr::writeFaceIds},
-                            {f.depth, hsr::OutputKind::Depth, hsr::writeDepth},
-                            {f.depthImage, hsr::OutputKind::DepthImage, hsr::writeDepthImage},
-                            {f.overdrawImage, hsr::OutputKind::OverdrawImage, hsr::writeOverdrawImage}};
+  checkRenderFlags(f, true);
+  Job job = prepareRender(f);
+  auto start = std::chrono::steady_clock::now();
+  hsr::Frame frame = hsr::render(job.scene, job.camera, job.options);
+  return finishRender(f, job, frame, start);
+}
+
+}  // namespace
+
+void checkRenderFlags(const RenderFlags& f, bool writes) {
   // Reject output names no writer knows, or that name no file, a special file or another
   // output's file, before any work is done.
-  hsr::cli::checkOutputSet(f.outputFlags);
-  for (const Output& o : outputs)
-    if (!o.path.empty()) hsr::checkOutputPath(o.kind, o.path);
+  if (writes) {
+    hsr::cli::checkOutputSet(f.outputFlags);
+    for (const Output& o : outputsOf(f))
+      if (!o.path.empty()) hsr::checkOutputPath(o.kind, o.path);
+  }
   if (f.view.depthOnly && (!f.out.empty() || !f.ids.empty()))
     throw InputError("--depth-only keeps no colour or face ids: drop --out/--ids or --depth-only");
   if (f.view.depthOnly && f.verify) throw InputError("--verify compares face ids, which --depth-only does not keep");
@@ -129,27 +133,32 @@ int runRender(const RenderFlags& f) {
     throw InputError("--ids: --outputs " + f.view.outputs + " keeps no face ids (add face)");
   if (f.verify && !has(kept, hsr::FrameOutputs::IdsAndDepth))
     throw InputError("--verify compares face and triangle ids: --outputs " + f.view.outputs + " lacks face or triangle");
-  checkAttributeOutputs(f, kept);
+  if (writes) checkAttributeOutputs(f, kept);
   if (f.shadows && !has(kept, hsr::FrameOutputs::TriangleIds))
     throw InputError("--shadows finds each pixel's point on its triangle: the outputs kept (" +
                      hsr::frameOutputsName(kept) + ") have no triangle ids (add triangle)");
-  const std::optional<hsr::Light> lightFromFlags = flagLight(f);
+  flagLight(f);  // its errors before the scene loads; finishRender uses the light
   if (f.shadows) hsr::checkShadowOptions(f.shadowOptions);
+  if (writes && !f.svg.empty()) hsr::checkSvgPath(f.svg);
+}
 
-  if (!f.svg.empty()) hsr::checkSvgPath(f.svg);
-
+Job prepareRender(const RenderFlags& f) {
   Job job = f.view.prepare();
   if (!f.svg.empty() && !hsr::paintsPolygons(job.options.algorithm))
     throw InputError("--svg: " + job.options.algorithm +
                      " paints no polygons (vector output needs --algorithm painter, newell or bsp)");
   job.options.verify = f.verify;
   job.options.countWrites = !f.overdrawImage.empty();
-  auto start = std::chrono::steady_clock::now();
-  hsr::Frame frame = hsr::render(job.scene, job.camera, job.options);
+  return job;
+}
+
+int finishRender(const RenderFlags& f, const Job& job, hsr::Frame& frame,
+                 std::chrono::steady_clock::time_point start) {
   if (f.shadows) {
     hsr::ShadowOptions shadowOptions = f.shadowOptions;
     shadowOptions.depthFormat = job.options.depthFormat;
     shadowOptions.threads = job.options.threads;
+    const std::optional<hsr::Light> lightFromFlags = flagLight(f);
     const hsr::Light light = lightFromFlags ? *lightFromFlags
                              : job.scene.light ? *job.scene.light
                                                : hsr::defaultLight(job.camera);
@@ -169,7 +178,7 @@ int runRender(const RenderFlags& f) {
       written.push_back(f.svg);
     }
     statsJson = frame.stats.toJson();
-    for (const Output& o : outputs) {
+    for (const Output& o : outputsOf(f)) {
       if (o.path.empty()) continue;
       o.write(frame, o.path);
       written.push_back(o.path);
@@ -191,10 +200,7 @@ int runRender(const RenderFlags& f) {
   return 0;
 }
 
-}  // namespace
-
-Runner setupRender(CLI::App& cmd) {
-  auto f = std::make_shared<RenderFlags>();
+void declareRenderFlags(CLI::App& cmd, RenderFlags* f) {
   f->view.declare(cmd);
   const char* outputs = "Outputs (written atomically, only after a successful render)";
   cmd.add_option("-o,--out", f->out, "Colour image")->type_name("COLOR.png")->group(outputs);
@@ -282,6 +288,11 @@ Runner setupRender(CLI::App& cmd) {
       "  hsr render scene.json --eye 4,3,5 --target 0,0,0 --depth-format u16:z --depth-image z.png\n"
       "  hsr render builtin:city --shadows --light-dir 1,-2,0.5 --shadow-map-size 4096 -o city.png --verify";
   cmd.footer(footer);
+}
+
+Runner setupRender(CLI::App& cmd) {
+  auto f = std::make_shared<RenderFlags>();
+  declareRenderFlags(cmd, f.get());
   return [f] { return runRender(*f); };
 }
 

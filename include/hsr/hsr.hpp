@@ -12,6 +12,7 @@
 #include <hsr/render.hpp>
 #include <hsr/scene.hpp>
 #include <hsr/shadows.hpp>
+#include <hsr/subscene.hpp>
 #include <hsr/verify.hpp>
 #include <hsr/orbit.hpp>
 #include <hsr/occlusion.hpp>
