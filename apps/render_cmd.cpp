@@ -1,7 +1,7 @@
 // `hsr render`: one frame of a scene, written to colour, face-id, depth and attribute files (all or
 // none), with statistics as a summary or JSON; optionally shadowed and verified against the exact
 // reference. Set up by the subcommand table in apps/main.cpp (docs/cli.md "hsr render"); its steps
-// are shared with hsr-mpi (render_cmd.hpp, apps/mpi/main.cpp).
+// are shared with hsr-mpi (render_cmd.hpp, apps/mpi_main.cpp).
 #include <hsr/hsr.hpp>
 #include <hsr/threads.hpp>
 

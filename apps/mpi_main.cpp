@@ -1,7 +1,7 @@
 // hsr-mpi: `hsr render` of one scene over the ranks of an MPI job. Every rank reads the flags,
 // loads the scene and resolves the camera; rank r renders only its share of the meshes (a spatial
 // partition, faces keeping their global ids) over the full frame; the frames are composited by
-// MPI (composite.hpp) and rank 0 writes the outputs as `hsr render` does. A failure on any rank
+// MPI (mpi/composite.hpp) and rank 0 writes the outputs as `hsr render` does. A failure on any rank
 // ends every rank with one line on stderr and the same exit status (docs/distributed.md).
 #include <hsr/hsr.hpp>
 #include <hsr/subscene.hpp>
@@ -17,10 +17,10 @@
 #include <limits>
 #include <new>
 
-#include "../commands.hpp"
-#include "../render_cmd.hpp"
-#include "composite.hpp"
-#include "partition.hpp"
+#include "commands.hpp"
+#include "mpi/composite.hpp"
+#include "mpi/partition.hpp"
+#include "render_cmd.hpp"
 
 namespace hsr::mpi {
 namespace {
