@@ -110,20 +110,6 @@ void setCounters(Stats& s, const std::vector<uint64_t>& c) {
   s.memory_bytes = c[8];
 }
 
-// The exact reference on rank 0, which holds the whole scene (as hsr::render's --verify does).
-void verifyComposite(const cli::Job& job, Frame& frame) {
-  RenderOptions reference = job.options;
-  reference.algorithm = "raycast";
-  reference.params.clear();
-  reference.verify = false;
-  const auto start = std::chrono::steady_clock::now();
-  const Frame exact = hsr::render(job.scene, job.camera, reference);
-  const VerifyResult v = verifyAgainstReference(job.scene, job.camera, job.options, frame, exact);
-  frame.stats.wrong_pixels = v.wrong_pixels;
-  frame.stats.ambiguous_pixels = v.ambiguous_pixels;
-  frame.stats.addTime("verify", cli::millisecondsSince(start));
-}
-
 int renderRanks(const cli::RenderFlags& f, const MpiFlags& m, MPI_Comm comm) {
   int rank = 0, ranks = 1;
   MPI_Comm_rank(comm, &rank);
@@ -219,7 +205,7 @@ int renderRanks(const cli::RenderFlags& f, const MpiFlags& m, MPI_Comm comm) {
       st.setDetail("mpi_composite", m.composite);
       st.setDetail("mpi_bytes_sent", uint64_t(bytesTotal));
       st.setDetail("mpi_bytes_sent_max", uint64_t(bytesMax));
-      if (f.verify) verifyComposite(job, frame);
+      if (f.verify) verifyFrame(job.scene, job.camera, job.options, frame);  // rank 0 holds the whole scene
       cli::finishRender(f, job, frame, start);
       if (f.quiet || f.json || f.stats == "-") return;
       fmt::print("  mpi: {} ranks, {} composite, sent {:.1f} MB in all, {:.1f} MB at most per rank\n", ranks,

@@ -61,6 +61,11 @@ Frame render(const Scene& scene, const Camera& camera, const RenderOptions& opti
 /// The same into `frame`, reusing its buffers.
 void render(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
 
+/// What options.verify does after a render: `frame` (drawn with `options`) against the ray-cast
+/// reference, into frame.stats (wrong_pixels, ambiguous_pixels; with transparency and colour,
+/// the colours against the A-buffer's). For frames made otherwise, e.g. composited by hsr-mpi.
+void verifyFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
+
 /// The instruction set the tiled rasterizer's SIMD kernel runs with on this machine, chosen at
 /// run time (e.g. "AVX3" = AVX-512, "AVX2", "SSE4", "EMU128"): for benchmark records.
 const char* kernelInstructionSet();

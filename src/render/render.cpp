@@ -59,8 +59,6 @@ void checkFrameOptions(const Scene& scene, const Camera& camera, const RenderOpt
                          frameOutputsName(options.outputs) + ") do not keep");
 }
 
-void verifyFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
-
 }  // namespace
 
 Renderer::Renderer(const Scene& scene, const RenderOptions& options)
@@ -110,8 +108,6 @@ void render(const Scene& scene, const Camera& camera, const RenderOptions& optio
   Renderer(scene, options).render(camera, frame);
 }
 
-namespace {
-
 // --verify: the frame against the ray-cast reference, and with transparency its colours against
 // the A-buffer's.
 void verifyFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame) {
@@ -149,7 +145,5 @@ void verifyFrame(const Scene& scene, const Camera& camera, const RenderOptions& 
     st.addTime("verify_colors", colorTimer.ms());
   }
 }
-
-}  // namespace
 
 }  // namespace hsr
