@@ -230,10 +230,10 @@ bool ViewFlags::openGlFlagsGiven() const {
   return !eye.empty() || !target.empty() || !up.empty() || fovFlag->count() || orthoFlag->count();
 }
 
-Job ViewFlags::prepare() const {
+Job ViewFlags::prepareOptions() const {
   Job job;
   job.sceneName = scene;
-  ImageSize imageSize = parseSize(size);
+  parseSize(size);
   job.options = options;
   job.options.params = parsedParams();
   for (const std::string& name : switchesOff) hsr::switchOff(job.options.tiled, name);
@@ -246,16 +246,21 @@ Job ViewFlags::prepare() const {
   if (!algorithm)
     throw InputError(fmt::format("--algorithm '{}': unknown (known: {})", options.algorithm, algorithmNames()));
   hsr::resolveParams(*algorithm, job.options.params);  // a parameter typo fails before the scene loads
-  std::optional<hsr::CameraSpec> fileCamera;
-  if (!cameraFile.empty()) fileCamera = hsr::parseCameraJson(readTextFile(cameraFile), cameraFile);
-  std::optional<hsr::dvec3> eyeValue, targetValue, upValue;
-  if (!eye.empty()) eyeValue = parseVec3("--eye", eye);
-  if (!target.empty()) targetValue = parseVec3("--target", target);
-  if (!up.empty()) upValue = parseVec3("--up", up);
+  return job;
+}
 
-  job.scene = hsr::loadScene(scene);
-  const hsr::Bounds3 bounds = job.scene.bounds();
-  hsr::CameraSpec spec = fileCamera         ? *fileCamera
+ViewFlags::CameraFlags ViewFlags::cameraFlags() const {
+  CameraFlags c;
+  if (!cameraFile.empty()) c.file = hsr::parseCameraJson(readTextFile(cameraFile), cameraFile);
+  if (!eye.empty()) c.eye = parseVec3("--eye", eye);
+  if (!target.empty()) c.target = parseVec3("--target", target);
+  if (!up.empty()) c.up = parseVec3("--up", up);
+  return c;
+}
+
+void ViewFlags::placeCamera(Job& job, const CameraFlags& c, const hsr::Bounds3& bounds) const {
+  ImageSize imageSize = parseSize(size);
+  hsr::CameraSpec spec = c.file             ? *c.file
                          : job.scene.camera ? *job.scene.camera
                          : fovFlag->count() ? hsr::frameBounds(bounds, fov)
                                             : hsr::frameBounds(bounds);
@@ -267,13 +272,13 @@ Job ViewFlags::prepare() const {
     throw InputError(cameraName + ": --eye/--target/--up/--fov/--ortho apply to OpenGL-style cameras, not this OpenCV one");
   // A scene's clipping planes suit its own viewpoint: when the flags move the camera, let
   // resolveCamera fit them to the scene again (a camera file's planes are the user's choice).
-  if (!fileCamera && (eyeValue || targetValue || orthoFlag->count())) {
+  if (!c.file && (c.eye || c.target || orthoFlag->count())) {
     spec.near.reset();
     spec.far.reset();
   }
-  if (eyeValue) spec.eye = *eyeValue;
-  if (targetValue) spec.target = *targetValue;
-  if (upValue) spec.up = *upValue;
+  if (c.eye) spec.eye = *c.eye;
+  if (c.target) spec.target = *c.target;
+  if (c.up) spec.up = *c.up;
   if (fovFlag->count()) spec.fovyDeg = fov;
   if (orthoFlag->count()) spec.orthoHeight = ortho;
   if (nearFlag->count()) spec.near = near;
@@ -281,6 +286,13 @@ Job ViewFlags::prepare() const {
   if (!sizeFlag->count() && spec.width && spec.height) imageSize = {*spec.width, *spec.height};
   warnPrincipalPointOutside(spec, imageSize, cameraName);
   job.camera = hsr::resolveCamera(spec, imageSize.width, imageSize.height, bounds, cameraName);
+}
+
+Job ViewFlags::prepare() const {
+  Job job = prepareOptions();
+  const CameraFlags camera = cameraFlags();
+  job.scene = hsr::loadScene(scene);
+  placeCamera(job, camera, job.scene.bounds());
   return job;
 }
 

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,19 @@ struct ViewFlags {
   /// Checks every flag, then loads the scene and resolves the camera: bad flags fail before a
   /// possibly long scene load.
   Job prepare() const;
+
+  // prepare()'s steps, for a caller that loads the scene its own way (hsr-mpi: a share per rank).
+  /// The camera given by the flags, parsed.
+  struct CameraFlags {
+    std::optional<hsr::CameraSpec> file;
+    std::optional<hsr::dvec3> eye, target, up;
+  };
+  /// Every flag but the camera's checked, and the options they give; no scene loaded.
+  Job prepareOptions() const;
+  CameraFlags cameraFlags() const;
+  /// job.camera from `camera`, else the scene's own (job.scene.camera), else one framing `bounds`
+  /// (the whole scene's), with the other camera flags applied.
+  void placeCamera(Job& job, const CameraFlags& camera, const hsr::Bounds3& bounds) const;
 };
 
 }  // namespace hsr::cli

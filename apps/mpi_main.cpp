@@ -1,6 +1,8 @@
-// hsr-mpi: `hsr render` of one scene over the ranks of an MPI job. Every rank reads the flags,
-// loads the scene and resolves the camera; rank r renders only its share of the meshes (a spatial
-// partition, faces keeping their global ids) over the full frame; the frames are composited by
+// hsr-mpi: `hsr render` of one scene over the ranks of an MPI job. Every rank reads the flags and
+// loads only its share of a scene JSON's mesh entries (any other scene: all of it, then keeps a
+// spatial partition's share); the ranks agree on the whole scene's bounds, which place the camera,
+// and on where each share's face ids start. Rank r renders its share over the full frame; the
+// frames are composited by
 // MPI (mpi/composite.hpp) and rank 0 writes the outputs as `hsr render` does. A failure on any rank
 // ends every rank with one line on stderr and the same exit status (docs/distributed.md).
 #include <hsr/hsr.hpp>
@@ -16,6 +18,8 @@
 #include <iostream>
 #include <limits>
 #include <new>
+
+#include <sys/resource.h>
 
 #include "commands.hpp"
 #include "mpi/composite.hpp"
@@ -65,6 +69,13 @@ int agree(const Outcome& mine, MPI_Comm comm) {
   return worst;
 }
 
+// This process's peak resident memory so far, in MB.
+double peakResidentMb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) / 1024.0;  // kilobytes on Linux
+}
+
 double cpuMs() {
   timespec t{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
@@ -77,7 +88,7 @@ struct MpiFlags {
 };
 
 // What only hsr-mpi refuses: images that do not composite by depth to one process's bits.
-void checkCompositable(const cli::RenderFlags& f, const cli::Job& job) {
+void checkCompositable(const cli::RenderFlags& f, const cli::Job& job, const Scene& held) {
   if (job.options.algorithm != "zbuffer")
     throw InputError("--algorithm " + job.options.algorithm +
                      ": hsr-mpi composites the z-buffer's images only (--algorithm zbuffer)");
@@ -87,7 +98,7 @@ void checkCompositable(const cli::RenderFlags& f, const cli::Job& job) {
                      "composite by (use tiled, halfspace or binned)");
   if (!f.overdrawImage.empty())
     throw InputError("--overdraw-image: the ranks' overdraw does not add up to one process's (drop it)");
-  const auto transparent = std::count_if(job.scene.faceColors.begin(), job.scene.faceColors.end(),
+  const auto transparent = std::count_if(held.faceColors.begin(), held.faceColors.end(),
                                          [](const Rgba8& c) { return c.a != 255; });
   if (transparent)
     throw InputError(fmt::format("{}: {} transparent faces: hsr-mpi composites opaque surfaces only",
@@ -96,7 +107,7 @@ void checkCompositable(const cli::RenderFlags& f, const cli::Job& job) {
 
 // Per rank, gathered to rank 0 for --verbose and the statistics.
 struct RankRecord {
-  double triangles, renderMs, renderCpuMs, storedMs, waitMs, compositeMs, bytesSent, rectWidth, rectHeight;
+  double firstEntry, entries, loadedTriangles, peakMb, triangles, renderMs, renderCpuMs, storedMs, waitMs, compositeMs, bytesSent, rectWidth, rectHeight;
 };
 
 // The counters of the ranks' frames that add up to the whole frame's.
@@ -110,32 +121,105 @@ void setCounters(Stats& s, const std::vector<uint64_t>& c) {
   s.memory_bytes = c[8];
 }
 
+// What needs the whole scene on rank 0 (the ranks hold shares): the check against the reference,
+// shadows, and the attributes resolved from the ids.
+bool needsWholeScene(const cli::RenderFlags& f) {
+  return f.verify || f.shadows || !f.instanceIds.empty() || !f.barycentric.empty();
+}
+
+// This rank's part of the scene as loaded, before the ranks agree on the whole's bounds and ids.
+struct Loaded {
+  ScenePart part;                // a share of a scene JSON's entries, or the whole scene
+  cli::ViewFlags::CameraFlags camera;
+};
+
+// The whole scene's bounds and counts, and where this rank's share starts in its face and
+// triangle order (each rank holds a run of entries, in rank order).
+struct Totals {
+  Bounds3 bounds;
+  uint64_t faces = 0, triangles = 0, firstFace = 0, firstTriangle = 0;
+};
+Totals totalsOf(const Scene& share, MPI_Comm comm) {
+  Totals t;
+  const Bounds3 mine = share.bounds();
+  MPI_Allreduce(&mine.lo[0], &t.bounds.lo[0], 3, MPI_DOUBLE, MPI_MIN, comm);
+  MPI_Allreduce(&mine.hi[0], &t.bounds.hi[0], 3, MPI_DOUBLE, MPI_MAX, comm);
+  const uint64_t counts[2] = {share.faceCount(), share.triangles.size()};
+  uint64_t sums[2] = {0, 0}, before[2] = {0, 0};
+  MPI_Allreduce(counts, sums, 2, MPI_UINT64_T, MPI_SUM, comm);
+  MPI_Exscan(counts, before, 2, MPI_UINT64_T, MPI_SUM, comm);  // undefined on rank 0: stays 0
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  t.faces = sums[0], t.triangles = sums[1];
+  if (rank > 0) t.firstFace = before[0], t.firstTriangle = before[1];
+  return t;
+}
+
+// A loaded share as the part this rank renders: its faces and triangles are the whole scene's
+// from `totals`' first ones on.
+SceneRange shareRange(Scene share, const Totals& totals) {
+  SceneRange r;
+  r.globalFace.resize(share.faceCount());
+  r.globalTriangle.resize(share.triangles.size());
+  for (size_t i = 0; i < r.globalFace.size(); ++i) r.globalFace[i] = uint32_t(totals.firstFace + i);
+  for (size_t i = 0; i < r.globalTriangle.size(); ++i) r.globalTriangle[i] = uint32_t(totals.firstTriangle + i);
+  r.scene = std::move(share);
+  return r;
+}
+
 int renderRanks(const cli::RenderFlags& f, const MpiFlags& m, MPI_Comm comm) {
   int rank = 0, ranks = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &ranks);
 
-  // Flags and scene, on every rank (only rank 0 writes, so only it checks the output files).
+  // Flags, and this rank's share of the scene (only rank 0 writes, so only it checks the output
+  // files). A scene JSON of several meshes is shared out by entries; anything else loads whole.
   cli::Job job;
+  Loaded loaded;
+  RankRecord record{};
   int status = agree(attempt([&] {
                        cli::checkRenderFlags(f, rank == 0);
-                       job = cli::prepareRender(f);
-                       checkCompositable(f, job);
+                       job = cli::prepareRenderOptions(f);
+                       loaded.camera = f.view.cameraFlags();
+                       loaded.part = loadScenePart(job.sceneName, rank, ranks);
+                       checkCompositable(f, job, loaded.part.scene);
+                       if (loaded.part.whole) {
+                         job.scene = std::move(loaded.part.scene);
+                       } else if (rank == 0 && needsWholeScene(f)) {
+                         job.scene = loadScene(job.sceneName);
+                       } else {
+                         job.scene.camera = loaded.part.scene.camera;
+                         job.scene.light = loaded.part.scene.light;
+                       }
+                       record.firstEntry = double(loaded.part.firstEntry);
+                       record.entries = double(loaded.part.entryCount);
+                       record.loadedTriangles = double(loaded.part.whole ? job.scene.triangles.size()
+                                                                         : loaded.part.scene.triangles.size());
                      }),
                      comm);
   if (status) return status;
   const auto start = std::chrono::steady_clock::now();  // the summary's wall time, as hsr render's
+
+  // The whole scene's bounds place the camera; a share's ids start where the earlier ranks' end.
+  const bool whole = loaded.part.whole;
+  const Totals totals = whole ? Totals{job.scene.bounds(), job.scene.faceCount(), job.scene.triangles.size(), 0, 0}
+                              : totalsOf(loaded.part.scene, comm);
 
   // This rank's share, rendered over the full frame with its stored depth.
   SceneRange part;
   Frame mine;
   std::vector<Sample> samples;
   Sample background{kBackground, std::numeric_limits<float>::infinity(), -1, -1, job.options.background};
-  RankRecord record{};
   status = agree(attempt([&] {
-                   const auto groups = partitionFaces(job.scene, ranks);
-                   part = extractFaces(job.scene, groups[size_t(rank)]);
-                   if (rank != 0) job.scene = Scene{};  // rank 0 keeps it for --verify, --shadows, attributes
+                   if (totals.faces == 0) throw InputError(job.sceneName + ": no polygon faces to render");
+                   f.view.placeCamera(job, loaded.camera, totals.bounds);
+                   if (whole) {
+                     const auto groups = partitionFaces(job.scene, ranks);
+                     part = extractFaces(job.scene, groups[size_t(rank)]);
+                     if (rank != 0) job.scene = Scene{};  // rank 0 keeps it for --verify, --shadows, attributes
+                   } else {
+                     part = shareRange(std::move(loaded.part.scene), totals);
+                   }
                    RenderOptions options = job.options;
                    options.verify = false;
                    if (options.outputs != FrameOutputs::DepthOnly) options.outputs = options.outputs | FrameOutputs::FaceIds;
@@ -162,6 +246,7 @@ int renderRanks(const cli::RenderFlags& f, const MpiFlags& m, MPI_Comm comm) {
                                       m.composite == "dense" ? Mode::Dense : Mode::Sparse, comm, image);
   samples = {};
   record.triangles = double(part.scene.triangles.size());
+  record.peakMb = peakResidentMb();
   record.compositeMs = cs.ms;
   record.bytesSent = double(cs.bytesSent);
   record.rectWidth = std::max(0, cs.rect[2] - cs.rect[0] + 1);
@@ -191,8 +276,8 @@ int renderRanks(const cli::RenderFlags& f, const MpiFlags& m, MPI_Comm comm) {
       frame.stats = mine.stats;
       Stats& st = frame.stats;
       setCounters(st, sums);
-      st.faces = job.scene.faceCount();
-      st.triangles = job.scene.triangles.size();
+      st.faces = totals.faces;
+      st.triangles = totals.triangles;
       st.covered_pixels = covered;
       double renderMax = 0, storedMax = 0, compositeMax = 0, bytesMax = 0, bytesTotal = 0;
       for (const RankRecord& r : records) {
@@ -203,20 +288,26 @@ int renderRanks(const cli::RenderFlags& f, const MpiFlags& m, MPI_Comm comm) {
       st.time_ms = {{"render_max", renderMax}, {"stored_depth_max", storedMax}, {"composite_max", compositeMax}};
       st.setDetail("mpi_ranks", uint64_t(ranks));
       st.setDetail("mpi_composite", m.composite);
+      st.setDetail("mpi_load", whole ? "whole" : "share");
       st.setDetail("mpi_bytes_sent", uint64_t(bytesTotal));
       st.setDetail("mpi_bytes_sent_max", uint64_t(bytesMax));
       if (f.verify) verifyFrame(job.scene, job.camera, job.options, frame);  // rank 0 holds the whole scene
       cli::finishRender(f, job, frame, start);
       if (f.quiet || f.json || f.stats == "-") return;
-      fmt::print("  mpi: {} ranks, {} composite, sent {:.1f} MB in all, {:.1f} MB at most per rank\n", ranks,
-                 m.composite, bytesTotal / 1e6, bytesMax / 1e6);
+      fmt::print("  mpi: {} ranks, {} composite, scene loaded {}, sent {:.1f} MB in all, {:.1f} MB at most per rank\n", ranks,
+                 m.composite, whole ? "whole by every rank" : "in shares of its entries", bytesTotal / 1e6, bytesMax / 1e6);
       if (!m.verbose) return;
       for (int r = 0; r < ranks; ++r) {
         const RankRecord& x = records[size_t(r)];
-        fmt::print("  rank {}: triangles {:.0f}, covers {:.0f}x{:.0f}, render {:.2f} ms ({:.2f} ms CPU), stored depth "
-                   "{:.2f} ms, waited {:.2f} ms, composite {:.2f} ms, sent {:.0f} bytes\n",
-                   r, x.triangles, x.rectWidth, x.rectHeight, x.renderMs, x.renderCpuMs, x.storedMs, x.waitMs,
-                   x.compositeMs, x.bytesSent);
+        const std::string loadedWhat =
+            whole ? fmt::format("the whole scene ({:.0f} triangles)", x.loadedTriangles)
+                  : fmt::format("entries {:.0f}..{:.0f} ({:.0f} triangles)", x.firstEntry, x.firstEntry + x.entries,
+                                x.loadedTriangles);
+        fmt::print("  rank {}: loaded {}, peak memory {:.1f} MB; triangles {:.0f}, covers {:.0f}x{:.0f}, render {:.2f} "
+                   "ms ({:.2f} ms CPU), stored depth {:.2f} ms, waited {:.2f} ms, composite {:.2f} ms, sent {:.0f} "
+                   "bytes\n",
+                   r, loadedWhat, x.peakMb, x.triangles, x.rectWidth, x.rectHeight, x.renderMs, x.renderCpuMs,
+                   x.storedMs, x.waitMs, x.compositeMs, x.bytesSent);
       }
     });
   }

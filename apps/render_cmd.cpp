@@ -142,13 +142,21 @@ void checkRenderFlags(const RenderFlags& f, bool writes) {
   if (writes && !f.svg.empty()) hsr::checkSvgPath(f.svg);
 }
 
-Job prepareRender(const RenderFlags& f) {
-  Job job = f.view.prepare();
+Job prepareRenderOptions(const RenderFlags& f) {
+  Job job = f.view.prepareOptions();
   if (!f.svg.empty() && !hsr::paintsPolygons(job.options.algorithm))
     throw InputError("--svg: " + job.options.algorithm +
                      " paints no polygons (vector output needs --algorithm painter, newell or bsp)");
   job.options.verify = f.verify;
   job.options.countWrites = !f.overdrawImage.empty();
+  return job;
+}
+
+Job prepareRender(const RenderFlags& f) {
+  Job job = prepareRenderOptions(f);
+  const ViewFlags::CameraFlags camera = f.view.cameraFlags();
+  job.scene = hsr::loadScene(job.sceneName);
+  f.view.placeCamera(job, camera, job.scene.bounds());
   return job;
 }
 

@@ -34,6 +34,9 @@ void declareRenderFlags(CLI::App& cmd, RenderFlags* f);
 void checkRenderFlags(const RenderFlags& f, bool writes);
 /// Loads the scene and resolves the camera and the options (InputError).
 Job prepareRender(const RenderFlags& f);
+/// prepareRender's options alone, every flag checked: no scene, no camera (hsr-mpi loads a share
+/// of the scene per rank and places the camera with ViewFlags::placeCamera).
+Job prepareRenderOptions(const RenderFlags& f);
 /// Shadows (with --shadows), the outputs (all or none) and the summary or JSON, for `frame`
 /// rendered from `job` since `start`. Returns the exit status (0).
 int finishRender(const RenderFlags& f, const Job& job, hsr::Frame& frame, std::chrono::steady_clock::time_point start);

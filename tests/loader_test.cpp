@@ -688,3 +688,50 @@ TEST_F(LoaderDispatch, BuiltinsAndBadPaths) {
 
 }  // namespace
 }  // namespace hsr
+
+// loadScenePart: a scene JSON's shares, in order, are the whole scene's faces in order (same
+// vertices, same colours), each share a run of whole entries; anything else loads whole.
+TEST(LoadScenePart, SharesInOrderAreTheWholeScene) {
+  const std::string blocks = std::string(HSR_SOURCE_DIR) + "/tests/mpi/data/blocks.json";
+  const hsr::Scene whole = hsr::loadScene(blocks);
+  for (int parts : {1, 2, 3, 5, 8, 11}) {
+    size_t face = 0, nextEntry = 0;
+    for (int p = 0; p < parts; ++p) {
+      const hsr::ScenePart share = hsr::loadScenePart(blocks, p, parts);
+      EXPECT_EQ(share.whole, parts == 1);
+      if (!share.whole) {
+        EXPECT_EQ(share.firstEntry, nextEntry) << parts << " parts, share " << p;
+        EXPECT_EQ(share.entriesInFile, 8u);
+        nextEntry += share.entryCount;
+      }
+      for (size_t f = 0; f < share.scene.faceCount(); ++f, ++face) {
+        ASSERT_LT(face, whole.faceCount());
+        const auto a = share.scene.face(f), b = whole.face(face);
+        ASSERT_EQ(a.size(), b.size());
+        for (size_t k = 0; k < a.size(); ++k)
+          ASSERT_EQ(share.scene.positions[a[k]], whole.positions[b[k]]) << parts << " parts, face " << face;
+        ASSERT_EQ(share.scene.faceColors[f], whole.faceColors[face]);
+      }
+    }
+    EXPECT_EQ(face, whole.faceCount()) << parts << " parts";
+    if (parts > 1) EXPECT_EQ(nextEntry, 8u);
+  }
+  const hsr::ScenePart builtin = hsr::loadScenePart("builtin:cubes", 1, 3);
+  EXPECT_TRUE(builtin.whole);
+  EXPECT_EQ(builtin.scene.faceCount(), hsr::loadScene("builtin:cubes").faceCount());
+  EXPECT_THROW(hsr::loadScenePart("builtin:cubes", 3, 3), std::invalid_argument);
+}
+
+// A share reports only its own entries' errors: the other shares load.
+TEST(LoadScenePart, AnEntrysErrorIsItsShares) {
+  const std::string missing = std::string(HSR_SOURCE_DIR) + "/tests/mpi/data/missing-mesh.json";
+  // A missing file weighs nothing, the built-in entry 1: shares of 3 are nothing, cubes, the missing file.
+  EXPECT_EQ(hsr::loadScenePart(missing, 0, 3).scene.faceCount(), 0u);
+  EXPECT_EQ(hsr::loadScenePart(missing, 1, 3).scene.faceCount(), hsr::loadScene("builtin:cubes").faceCount());
+  try {
+    hsr::loadScenePart(missing, 2, 3);
+    ADD_FAILURE() << "the missing mesh loaded";
+  } catch (const hsr::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no-such-mesh.obj"), std::string::npos) << e.what();
+  }
+}

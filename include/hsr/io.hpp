@@ -16,6 +16,19 @@ namespace hsr {
 /// (glTF/GLB, ...). The returned scene is finalized.
 Scene loadScene(const std::string& path);
 
+/// One process's share of a scene, for processes that each hold only their own (hsr-mpi).
+struct ScenePart {
+  Scene scene;          // finalized (possibly empty); a scene JSON's camera and light
+  bool whole = false;   // not a scene JSON of several meshes: `scene` is all of it
+  size_t firstEntry = 0, entryCount = 0, entriesInFile = 0;  // the scene JSON's mesh entries it holds
+};
+/// Share `part` (0 <= part < parts) of the scene at `path`. A scene JSON of two or more mesh
+/// entries is cut into `parts` contiguous runs of entries of about equal weight (a file's bytes; a
+/// built-in entry weighs as the mean file) and only run `part` is loaded; its faces are the whole
+/// scene's, in order, from the sum of the earlier runs' face counts on. Any other scene is loaded
+/// whole (`whole`). Errors as loadScene's, except that an empty share is no error.
+ScenePart loadScenePart(const std::string& path, int part, int parts);
+
 /// Writers. The format follows the extension where there is a choice.
 void writeColorPng(const Frame& frame, const std::string& path);
 void writeFaceIds(const Frame& frame, const std::string& path);     // .png (24-bit id+1) or .npy (int32)

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <stdexcept>
 #include <fstream>
 
 #include "scene/loaders.hpp"
@@ -262,6 +263,56 @@ Scene loadAny(const std::string& path, LoadContext& context) {
 }
 
 }  // namespace loaders
+
+namespace {
+
+// Mesh entries [first, end) of run `part` when `weights` are cut into `parts` contiguous runs of
+// about equal weight: an entry goes to the run its weight's midpoint falls in. An empty run
+// starts where the next one does, so the runs in order cover the entries in order.
+loaders::EntryRange entryRun(const std::vector<double>& weights, int part, int parts) {
+  double total = 0;
+  for (double w : weights) total += w;
+  loaders::EntryRange range{weights.size(), weights.size()};
+  double before = 0;
+  for (size_t i = 0; i < weights.size(); ++i) {
+    const double middle = total > 0 ? (before + weights[i] / 2) / total : (double(i) + 0.5) / double(weights.size());
+    const int run = std::min(parts - 1, int(middle * parts));
+    before += weights[i];
+    if (run >= part && range.first == weights.size()) range.first = i;
+    if (run > part) {
+      range.end = i;
+      break;
+    }
+  }
+  return range;
+}
+
+}  // namespace
+
+ScenePart loadScenePart(const std::string& path, int part, int parts) {
+  if (parts < 1 || part < 0 || part >= parts) throw std::invalid_argument("loadScenePart: part outside 0..parts-1");
+  ScenePart out;
+  if (parts == 1 || loaders::lowerExtension(path) != ".json" || path.starts_with("builtin:")) {
+    out.scene = loadScene(path);
+    out.whole = true;
+    return out;
+  }
+  const std::string bytes = loaders::readFile(path);
+  const std::vector<double> weights = loaders::sceneJsonEntryWeights(path, loaders::skipBom(bytes));
+  if (weights.size() < 2) {
+    out.scene = loadScene(path);
+    out.whole = true;
+    return out;
+  }
+  const loaders::EntryRange run = entryRun(weights, part, parts);
+  out.firstEntry = run.first;
+  out.entryCount = run.end - run.first;
+  out.entriesInFile = weights.size();
+  loaders::LoadContext context;
+  out.scene = loaders::loadSceneJson(path, loaders::skipBom(bytes), context, run);
+  out.scene.finalize();
+  return out;
+}
 
 Scene loadScene(const std::string& path) {
   loaders::LoadContext context;

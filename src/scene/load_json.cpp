@@ -201,9 +201,50 @@ Light readLight(const json& v, const std::string& path, std::string_view text) {
   return light;
 }
 
+// The file's root object, checked: its keys, and a non-empty list of meshes.
+json sceneRoot(const std::string& path, std::string_view bytes) {
+  json root;
+  try {
+    root = parseJsonOrThrow(std::string(bytes), path);
+  } catch (const json::out_of_range&) {  // a number too large for a double: no position given
+    throw InputError(path + ": JSON number out of range");
+  }
+  if (!root.is_object()) throw InputError(path + ": a scene file must be a JSON object");
+  for (const auto& item : root.items())
+    if (item.key() != "meshes" && item.key() != "camera" && item.key() != "light")
+      throw InputError(path + ": unknown key " + quote(item.key()) + " (expected 'meshes', 'camera' and 'light')");
+  if (!root.contains("meshes") || !root.at("meshes").is_array() || root.at("meshes").empty())
+    throw InputError(path + ": 'meshes' must be a non-empty array");
+  return root;
+}
+
 }  // namespace
 
-Scene loadSceneJson(const std::string& path, std::string_view bytes, LoadContext& context) {
+std::vector<double> sceneJsonEntryWeights(const std::string& path, std::string_view bytes) {
+  const json root = sceneRoot(path, bytes);
+  const fs::path folder = fs::path(path).parent_path();
+  std::vector<double> weights;
+  double fileBytes = 0;
+  size_t files = 0;
+  for (const json& entry : root.at("meshes")) {
+    double w = -1;  // a built-in entry, weighed below
+    if (entry.is_object() && entry.contains("file") && entry.at("file").is_string()) {
+      const fs::path file = entry.at("file").get<std::string>();
+      std::error_code ec;
+      const auto size = fs::file_size(file.is_absolute() ? file : folder / file, ec);
+      w = ec ? 0.0 : double(size);  // an unreadable file fails where it is loaded
+      fileBytes += w;
+      ++files;
+    }
+    weights.push_back(w);
+  }
+  const double builtinWeight = files && fileBytes > 0 ? fileBytes / double(files) : 1.0;
+  for (double& w : weights)
+    if (w < 0) w = builtinWeight;
+  return weights;
+}
+
+Scene loadSceneJson(const std::string& path, std::string_view bytes, LoadContext& context, EntryRange entries) {
   std::error_code ec;
   std::string canonical = fs::weakly_canonical(path, ec).string();
   if (ec) canonical = path;
@@ -217,24 +258,12 @@ Scene loadSceneJson(const std::string& path, std::string_view bytes, LoadContext
     ~Pop() { c.openJsonFiles.pop_back(); }
   } pop{context};
 
-  json root;
-  try {
-    root = parseJsonOrThrow(std::string(bytes), path);
-  } catch (const json::out_of_range&) {  // a number too large for a double: no position given
-    throw InputError(path + ": JSON number out of range");
-  }
-  if (!root.is_object()) throw InputError(path + ": a scene file must be a JSON object");
-  for (const auto& item : root.items())
-    if (item.key() != "meshes" && item.key() != "camera" && item.key() != "light")
-      throw InputError(path + ": unknown key " + quote(item.key()) + " (expected 'meshes', 'camera' and 'light')");
-  if (!root.contains("meshes") || !root.at("meshes").is_array() || root.at("meshes").empty())
-    throw InputError(path + ": 'meshes' must be a non-empty array");
-
+  const json root = sceneRoot(path, bytes);
   Scene scene;
   scene.source = path;
   const fs::path folder = fs::path(path).parent_path();
   const json& meshes = root.at("meshes");
-  for (size_t i = 0; i < meshes.size(); ++i) {
+  for (size_t i = entries.first; i < std::min(entries.end, meshes.size()); ++i) {
     EntryReader entry(path, i, meshes[i]);
     entry.checkKeys();
     const dmat4 worldFromMesh = entry.transform();

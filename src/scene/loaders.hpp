@@ -4,6 +4,7 @@
 #pragma once
 #include <hsr/scene.hpp>
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -30,7 +31,16 @@ Scene loadPly(const std::string& path, std::string_view bytes);
 Scene loadStl(const std::string& path, std::string_view bytes);
 Scene loadOff(const std::string& path, std::string_view bytes);
 Scene loadAssimp(const std::string& path);
-Scene loadSceneJson(const std::string& path, std::string_view bytes, LoadContext& context);
+/// Mesh entries [first, end) of a scene JSON.
+struct EntryRange {
+  size_t first = 0, end = SIZE_MAX;
+};
+/// A scene JSON's mesh entries in `entries` (all by default), with the file's camera and light.
+Scene loadSceneJson(const std::string& path, std::string_view bytes, LoadContext& context, EntryRange entries = {});
+/// Per mesh entry of a scene JSON, its weight for sharing the entries among processes: a file's
+/// size in bytes (0 if it cannot be read: its loader reports that), a built-in entry the mean of
+/// the files' (1 when there are none).
+std::vector<double> sceneJsonEntryWeights(const std::string& path, std::string_view bytes);
 
 /// Reads a whole file. Throws InputError "path: file not found", "path: is a directory, not a
 /// file", "path: file is empty" or "path: cannot open file (reason)".

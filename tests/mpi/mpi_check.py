@@ -4,7 +4,9 @@
   mpi_check.py same HSR HSR_MPI MPIRUN RANKS SCENE [FLAG ...]
       `hsr render` and `mpirun -n RANKS hsr-mpi render` with the same flags write the same bytes
       (ids, depth, colour), and hsr-mpi's --verify finds no wrong pixel. With --expect-empty-rank
-      among the flags (taken out before running), some rank must have had no triangles.
+      among the flags (taken out before running), some rank must have had no triangles; with
+      --expect-share, every rank must have loaded only its share of the scene's entries (the
+      shares' triangles add up to the scene's).
   mpi_check.py fails HSR HSR_MPI MPIRUN RANKS STATUS EXPECTED SCENE [FLAG ...]
       hsr-mpi ends with exit status STATUS (2: bad input, 1: an output not written), exactly one
       line on stderr (containing EXPECTED), no output file, and well within the test's timeout
@@ -14,6 +16,7 @@
 """
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -37,7 +40,8 @@ def fail(message):
 
 def same(hsr, hsr_mpi, mpirun, ranks, scene, flags):
     expect_empty = "--expect-empty-rank" in flags
-    flags = [f for f in flags if f != "--expect-empty-rank"]
+    expect_share = "--expect-share" in flags
+    flags = [f for f in flags if f not in ("--expect-empty-rank", "--expect-share")]
     mpi_flags = []
     if "--composite" in flags:
         at = flags.index("--composite")
@@ -71,6 +75,14 @@ def same(hsr, hsr_mpi, mpirun, ranks, scene, flags):
         if len(rank_lines) != ranks:
             fail(f"--verbose printed {len(rank_lines)} rank lines for {ranks} ranks:\n{many.stdout}")
         empty = [l for l in rank_lines if "triangles 0," in l]
+        if expect_share:
+            shares = [re.search(r"loaded entries (\d+)\.\.(\d+) \((\d+) triangles\)", l) for l in rank_lines]
+            if not all(shares):
+                fail("a rank did not load a share of the entries:\n" + many.stdout)
+            if sum(int(m.group(3)) for m in shares) != s["triangles"]:
+                fail(f"the shares' triangles do not add up to the scene's {s['triangles']}:\n" + many.stdout)
+            if any(a.group(2) != b.group(1) for a, b in zip(shares, shares[1:])):
+                fail("the ranks' entries are not consecutive runs:\n" + many.stdout)
         if expect_empty and not empty:
             fail("no rank was empty:\n" + many.stdout)
         print(f"ok: {scene} {' '.join(flags)} on {ranks} ranks: ids, depth and colour equal hsr render's;"
