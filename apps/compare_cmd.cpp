@@ -164,6 +164,8 @@ int runCompare(const CompareFlags& f) {
   };
   Json results = withHead(runStudy(cases, variants, settings, [&](const Json& partial) { writeOutputs(f.out, withHead(partial)); }));
   if (f.scenes.empty() && !gInterrupted) results["zfight"] = zfightExperiment(settings, f.quick);
+  if (f.scenes.empty() && !gInterrupted) results["coherence"] = coherenceExperiment(settings, f.quick);
+  if (f.scenes.empty() && !gInterrupted) results["depth_compression"] = depthCompressionExperiment(settings, f.quick);
   results["complete"] = !gInterrupted.load();
   writeOutputs(f.out, results);
   std::signal(SIGINT, previous);

@@ -36,7 +36,9 @@ TEST(Algorithms, RegistryDeclaresZBufferAndRaycast) {
   ASSERT_NE(findAlgorithm("zbuffer-half-range"), nullptr);
   EXPECT_TRUE(findAlgorithm("zbuffer-half-range")->params.empty());
   ASSERT_NE(findAlgorithm("zbuffer-culled"), nullptr);
-  EXPECT_TRUE(findAlgorithm("zbuffer-culled")->params.empty());
+  ASSERT_EQ(findAlgorithm("zbuffer-culled")->params.size(), 1u);
+  EXPECT_EQ(findAlgorithm("zbuffer-culled")->params[0].name, "temporal");
+  EXPECT_EQ(findAlgorithm("zbuffer-culled")->params[0].defaultValue, "off");
   EXPECT_TRUE(r->params.empty());
   for (const AlgorithmInfo& a : algorithms()) {
     EXPECT_FALSE(a.summary.empty()) << a.name;

@@ -230,6 +230,48 @@ Json zfightClaim(const Json& results) {
                fights && mitigated ? "holds" : "does not hold");
 }
 
+// Ukrainian paper: temporal coherence among the z-buffer's improvements.
+Json coherenceClaim(const Json& results) {
+  const char* text = "Temporal coherence: the previous frame's visible objects drawn first as occluders let occlusion "
+                     "culling set up fewer triangles, with the same image";
+  if (!results.contains("coherence")) return notMeasured(text, "Ukrainian paper", "the coherence experiment did not run");
+  std::string measured;
+  bool fewer = true, same = true;
+  const Json& rows = results["coherence"];
+  for (size_t i = 0; i + 1 < rows.size(); i += 2) {
+    const Json &off = rows[i], &on = rows[i + 1];
+    const double a = off["set_up_triangles_per_frame"], b = on["set_up_triangles_per_frame"];
+    fewer &= b < a;
+    same &= on["frames_identical"] == on["poses"];
+    measured += fmt::format("{}{} {}, {} poses: {:.0f} triangles set up a frame without, {:.0f} with ({:.1f} and {:.1f} "
+                            "ms); {} of {} frames identical",
+                            measured.empty() ? "" : "; ", on["scene"].get<std::string>(), on["size"].get<std::string>(),
+                            on["poses"].get<int>(), a, b, off["median_ms"].get<double>(), on["median_ms"].get<double>(),
+                            on["frames_identical"].get<uint64_t>(), on["poses"].get<int>());
+  }
+  return claim(text, "Ukrainian paper", "zbuffer-culled temporal=off/on over an orbit: " + measured,
+               !same ? "does not hold" : fewer ? "holds" : "holds only in part (the same image, not fewer triangles)");
+}
+
+// Ukrainian paper: lossless z-buffer compression among the z-buffer's improvements.
+Json compressionClaim(const Json& results) {
+  const char* text = "Lossless z-buffer compression saves memory and bandwidth";
+  if (!results.contains("depth_compression"))
+    return notMeasured(text, "Ukrainian paper", "the compression experiment did not run");
+  std::string measured;
+  bool exact = true, smaller = true;
+  for (const Json& r : results["depth_compression"]) {
+    exact &= r["round_trip_exact"].get<bool>();
+    smaller &= r["ratio"].get<double>() > 1;
+    measured += fmt::format("{}{} {}: {:.1f}x", measured.empty() ? "" : "; ", r["scene"].get<std::string>(),
+                            r["format"].get<std::string>(), r["ratio"].get<double>());
+  }
+  return claim(text, "Ukrainian paper",
+               "8x8 blocks clear, a plane with packed residuals, or raw; the final buffer against its allocation, "
+               "round trips bit for bit: " + measured,
+               !exact ? "does not hold" : smaller ? "holds" : "holds only in part (some buffers do not shrink)");
+}
+
 // The bytes of the buffers a real frame of `scene` at w x h uses for the figure: the textbook
 // z-buffer's depth buffer in `depthFormat` (if any) and the frame's colour (if asked), as its
 // statistics name them (docs/memory.md).
@@ -318,6 +360,8 @@ Json evaluateClaims(const Json& results) {
   for (Json c : {reversePainterClaim(results), failureClaim(results)})
     if (!c.is_null()) out.push_back(c);
   out.push_back(zfightClaim(results));
+  out.push_back(coherenceClaim(results));
+  out.push_back(compressionClaim(results));
   memoryClaims(out);
   for (const Json& c : precisionClaims()) out.push_back(c);
   return out;

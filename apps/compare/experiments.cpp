@@ -1,5 +1,6 @@
-// The study's experiments beyond scene x algorithm: z-fighting per depth format, the memory of
-// the buffers, and depth precision curves (study.hpp).
+// The study's experiments beyond scene x algorithm: z-fighting per depth format, temporal
+// coherence over an orbit, lossless depth compression, the memory of the buffers, and depth
+// precision curves (study.hpp).
 #include "study.hpp"
 
 #include "../commands.hpp"
@@ -59,6 +60,81 @@ Json zfightExperiment(const StudySettings& settings, bool quick) {
       rows.push_back({{"gap", std::stod(gap)}, {"format", label}, {"depth_slices", z.slices},
                       {"fighting_pixels", fighting}, {"covered_pixels", frame.stats.covered_pixels}, {"ms", ms},
                       {"image", file}});
+    }
+  }
+  return rows;
+}
+
+Json coherenceExperiment(const StudySettings& settings, bool quick) {
+  const int w = quick ? 160 : 640, h = quick ? 120 : 480, poses = quick ? 6 : 48;
+  Json rows = Json::array();
+  for (const char* name : {"builtin:city"}) {
+    const Scene scene = loadScene(name);
+    const CameraSpec spec = scene.camera ? *scene.camera : frameBounds(scene.bounds());
+    const Camera camera = resolveCamera(spec, w, h, scene.bounds(), name);
+    const std::vector<Camera> orbit = orbitCameras(camera, scene.bounds().center(), poses);
+    std::vector<FrameBuffer<int32_t>> ids;  // temporal=off's face ids per pose, to compare with on's
+    for (const char* temporal : {"off", "on"}) {
+      if (settings.interrupted && settings.interrupted->load()) return rows;
+      RenderOptions options;
+      options.algorithm = "zbuffer-culled";
+      options.params = {{"temporal", temporal}};
+      options.threads = settings.threads;
+      Renderer renderer(scene, options);  // one object over the whole orbit: the last frame's meshes are kept
+      Frame frame;
+      std::vector<double> ms;
+      uint64_t setUp = 0, carried = 0, same = 0;
+      for (size_t i = 0; i < orbit.size(); ++i) {
+        const auto start = std::chrono::steady_clock::now();
+        renderer.render(orbit[i], frame);
+        ms.push_back(millisecondsSince(start));
+        const Stats& st = frame.stats;
+        setUp += st.triangles - st.culled_frustum - st.culled_occlusion;
+        if (auto c = st.detailCount("objects_carried")) carried += *c;
+        if (std::string(temporal) == "off") ids.push_back(frame.faceId);
+        else same += frame.faceId == ids[i];
+      }
+      std::sort(ms.begin(), ms.end());
+      Json row = {{"scene", name}, {"size", fmt::format("{}x{}", w, h)}, {"poses", poses}, {"temporal", temporal},
+                  {"set_up_triangles_per_frame", double(setUp) / double(poses)}, {"median_ms", ms[ms.size() / 2]},
+                  {"meshes_carried_per_frame", double(carried) / double(poses)}};
+      if (std::string(temporal) == "on") row["frames_identical"] = same;
+      rows.push_back(row);
+    }
+  }
+  return rows;
+}
+
+Json depthCompressionExperiment(const StudySettings& settings, bool quick) {
+  const int w = quick ? 160 : 1920, h = quick ? 120 : 1080;
+  Json rows = Json::array();
+  for (const char* name : {"builtin:city", "builtin:sphere", "builtin:random?n=5000", "builtin:layers?n=64&order=random",
+                           "builtin:clutter"}) {
+    const Scene scene = loadScene(name);
+    const CameraSpec spec = scene.camera ? *scene.camera : frameBounds(scene.bounds());
+    const Camera camera = resolveCamera(spec, w, h, scene.bounds(), name);
+    for (const char* formatName : {"u16:z", "u24:z", "f32:reversed"}) {
+      if (settings.interrupted && settings.interrupted->load()) return rows;
+      const DepthFormat format = DepthFormat::parse(formatName);
+      OcclusionBuffer buffer;
+      OcclusionOptions options;
+      options.depthFormat = format;
+      options.threads = settings.threads;
+      buffer.render(scene, camera, options);
+      const std::vector<uint32_t> words = storedDepthWords(buffer, format);
+      const auto start = std::chrono::steady_clock::now();
+      const CompressedDepth c = compressDepth(words, w, h, clearDepthWord(format));
+      const double ms = millisecondsSince(start);
+      const bool exact = decompressDepth(c) == words;
+      // As allocated (u16 in 2 bytes, u24 and 32-bit formats in 4): what the compressed bytes replace.
+      const uint64_t allocated = uint64_t(w) * uint64_t(h) * uint64_t(format.bytesPerPixel());
+      rows.push_back({{"scene", name}, {"size", fmt::format("{}x{}", w, h)}, {"format", formatName},
+                      {"buffer_bytes", allocated}, {"compressed_bytes", c.bytes.size()},
+                      {"ratio", double(allocated) / double(c.bytes.size())}, {"clear_blocks", c.clearBlocks},
+                      {"plane_blocks", c.planeBlocks}, {"residual_blocks", c.residualBlocks},
+                      {"raw_blocks", c.rawBlocks}, {"compress_ms", ms}, {"round_trip_exact", exact},
+                      // A tiled renderer loads and stores each tile's depth once a frame: twice the buffer.
+                      {"traffic_saved_bytes", 2 * (int64_t(allocated) - int64_t(c.bytes.size()))}});
     }
   }
   return rows;

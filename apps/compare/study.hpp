@@ -60,6 +60,14 @@ Json runStudy(const std::vector<StudyCase>& cases, const std::vector<Variant>& v
 /// Z-fighting: the nearly coplanar built-in scene at several gaps, pixels whose face differs from
 /// the reference per depth format, with pictures.
 Json zfightExperiment(const StudySettings& settings, bool quick);
+/// Temporal coherence: zbuffer-culled with and without temporal=on over an orbit of the city (one
+/// algorithm object per orbit): triangles set up and time per frame, and whether every
+/// frame's face ids are the same with it as without.
+Json coherenceExperiment(const StudySettings& settings, bool quick);
+/// Lossless depth compression (hsr/depth_compression.hpp) of the final depth buffer of scenes at
+/// 1920x1080 in three formats: bytes against the buffer as allocated, the blocks of each kind, and
+/// the round trip checked bit for bit.
+Json depthCompressionExperiment(const StudySettings& settings, bool quick);
 /// The buffers' bytes per depth format and image size: packed (as the documents count) and as
 /// hsr allocates them.
 Json memoryTable();

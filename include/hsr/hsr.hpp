@@ -16,6 +16,7 @@
 #include <hsr/verify.hpp>
 #include <hsr/orbit.hpp>
 #include <hsr/occlusion.hpp>
+#include <hsr/depth_compression.hpp>
 #include <hsr/precision.hpp>
 #include <hsr/views.hpp>
 #include <hsr/svg.hpp>

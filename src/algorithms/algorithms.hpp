@@ -102,9 +102,19 @@ Guarantee listPriorityFailures(const std::string& key);
 /// The scenes of the conformance suite where that order is wrong (failures.cpp).
 std::vector<std::string> listPriorityFailureScenes(const std::string& key);
 
+/// Temporal coherence of occlusion culling: the meshes that showed in the previous frame (per mesh,
+/// 1 when a pixel showed it; empty before the first frame), kept by the algorithm object from
+/// frame to frame and drawn first, untested, as occluders; every other mesh is tested as before.
+/// Which meshes go first changes only what is culled, never the image.
+struct MeshesShown {
+  std::vector<uint8_t> shown;
+};
+
 /// The textbook z-buffer with occlusion culling (hzb.cpp: objects tested against the z-pyramid,
-/// their triangles drawn with a depth test at every pixel).
-void zbufferOcclusionCulled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
+/// their triangles drawn with a depth test at every pixel); with `coherence`, the last frame's
+/// meshes drawn first, and this frame's recorded there.
+void zbufferOcclusionCulled(const Scene& scene, const Camera& camera, const RenderOptions& options,
+                            MeshesShown* coherence, Frame& frame);
 
 /// The production z-buffer: binned, tiled, SIMD, multithreaded (zbuffer_tiled.cpp), with the
 /// bins, tile buffers and occlusion buffer it keeps from one frame to the next.

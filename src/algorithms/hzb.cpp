@@ -147,6 +147,20 @@ class HierarchicalZBuffer {
   }
   DepthSetup depthSetup() const { return depth_; }
   void resolve(const TriangleShader& shade, DrawCounters& n) { pixels_.resolve(tris_, shade, n); }
+  /// Per mesh of `scene`, 1 when some pixel's winner is one of its triangles: the triangles that
+  /// won a pixel, then each one's mesh (meshes hold ascending runs of triangles).
+  void meshesShown(const Scene& scene, std::vector<uint8_t>& shown) const {
+    std::vector<uint8_t> won(tris_.size(), 0);
+    for (uint32_t w : pixels_.winners())
+      if (w) won[w - 1] = 1;
+    shown.assign(scene.meshes.size(), 0);
+    const auto firstOf = [](uint32_t triangle, const MeshRange& m) { return triangle < m.firstTriangle; };
+    for (size_t i = 0; i < won.size(); ++i)
+      if (won[i]) {
+        const auto after = std::upper_bound(scene.meshes.begin(), scene.meshes.end(), tris_[i].triangle, firstOf);
+        shown[size_t(after - scene.meshes.begin()) - 1] = 1;
+      }
+  }
   const std::array<LevelCounts, kMaxLevels>& counts() const { return counts_; }
   int levels() const { return pyramid_.levels(); }
   uint64_t trianglesRejected() const { return hidden_; }
@@ -299,15 +313,19 @@ constexpr size_t kBatches = 32;
 // What occlusion culling counted.
 struct ObjectCounts {
   uint64_t objects = 0, objectsCulled = 0, trianglesCulled = 0, batches = 0;
+  uint64_t objectsCarried = 0;  // with temporal coherence: drawn first, untested, as shown in the last frame
 };
+
+
 
 // The scene's triangles drawn object by object into `hz` (see kBatches), each batch's set-up
 // triangles appended to `triangles` (nearest faces first when `frontToBack`); front-end counts
 // summed into `counters`, the front end's memory into `frontEndBytes`.
+// With `carried` (temporal coherence), the meshes it marks go in the first batch, untested.
 template <class HZ>
 ObjectCounts drawByObjects(const Scene& scene, const Camera& camera, const RenderOptions& options, bool frontToBack,
-                           HZ& hz, std::vector<SetupTriangle>& triangles, FrontEndCounters& counters,
-                           uint64_t& frontEndBytes, DrawCounters& n) {
+                           const std::vector<uint8_t>* carried, HZ& hz, std::vector<SetupTriangle>& triangles,
+                           FrontEndCounters& counters, uint64_t& frontEndBytes, DrawCounters& n) {
   const size_t meshCount = scene.meshes.size();
   std::vector<MeshTest> tests(meshCount);
   std::vector<MeshBound> bounds(meshCount);
@@ -319,14 +337,16 @@ ObjectCounts drawByObjects(const Scene& scene, const Camera& camera, const Rende
       if (vertices.meshCulled[m]) tests[m] = MeshTest::Outside;
   });
   std::vector<uint32_t> unbounded, bounded;
+  ObjectCounts c;
   for (uint32_t m = 0; m < meshCount; ++m) {
+    const bool carry = carried && !carried->empty() && (*carried)[m];
     if (tests[m] == MeshTest::Outside) counters.culledFrustum += scene.meshes[m].triangleCount;
-    else (tests[m] == MeshTest::None ? unbounded : bounded).push_back(m);
+    else (tests[m] == MeshTest::None || carry ? unbounded : bounded).push_back(m);
+    c.objectsCarried += carry && tests[m] == MeshTest::Bounded;
   }
   std::stable_sort(bounded.begin(), bounded.end(), [&](uint32_t a, uint32_t b) { return bounds[a].zMin < bounds[b].zMin; });
   const std::vector<uint32_t> ranks =
       frontToBack ? faceRanks(faceKeys(scene, camera, SortKey::Min), /*backToFront=*/false) : std::vector<uint32_t>{};
-  ObjectCounts c;
   c.objects = unbounded.size() + bounded.size();
   const size_t perBatch = std::max<size_t>(1, (bounded.size() + kBatches - 1) / kBatches);
   std::vector<uint32_t> batch;
@@ -367,6 +387,7 @@ struct PyramidUse {
   bool frontToBack = false;   // faces nearest first (by their nearest vertex), else as submitted
   bool testTriangles = true;  // the hierarchical z-buffer: each triangle tested against the pyramid
   bool cull = false;          // occlusion culling: meshes tested against the pyramid before set-up
+  std::vector<uint8_t>* shown = nullptr;  // with cull: temporal coherence (MeshesShown), its meshes drawn first
 };
 
 // A frame of the hierarchical z-buffer (use.testTriangles) or of the textbook z-buffer on its
@@ -384,7 +405,8 @@ void pyramidFrame(const Scene& scene, const Camera& camera, const RenderOptions&
       HierarchicalZBuffer<S, M> hz(work.triangles, camera, options, frame, use.testTriangles);
       if (use.cull) {
         Timer timer;
-        const ObjectCounts c = drawByObjects(scene, camera, options, use.frontToBack, hz, work.triangles,
+        const ObjectCounts c = drawByObjects(scene, camera, options, use.frontToBack,
+                                             use.shown, hz, work.triangles,
                                              work.frontEnd, work.frontEndBytes, n);
         st.addTime("frontend+raster", timer.lap());
         st.culled_occlusion = c.trianglesCulled;
@@ -392,9 +414,11 @@ void pyramidFrame(const Scene& scene, const Camera& camera, const RenderOptions&
         st.setDetail("objects_culled", c.objectsCulled);
         st.setDetail("triangles_culled", c.trianglesCulled);
         st.setDetail("batches", c.batches);
+        if (use.shown) st.setDetail("objects_carried", c.objectsCarried);
       } else {
         hz.drawFrom(0, n);
       }
+      if (use.shown) hz.meshesShown(scene, *use.shown);
       hz.resolve(shade, n);
       hz.addMemory(st);
       if (!use.testTriangles) return;
@@ -428,8 +452,11 @@ class Hzb final : public SceneAlgorithm {
 
 }  // namespace
 
-void zbufferOcclusionCulled(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame) {
-  pyramidFrame(scene, camera, options, {.frontToBack = false, .testTriangles = false, .cull = true}, frame);
+void zbufferOcclusionCulled(const Scene& scene, const Camera& camera, const RenderOptions& options,
+                            MeshesShown* coherence, Frame& frame) {
+  pyramidFrame(scene, camera, options,
+               {.frontToBack = false, .testTriangles = false, .cull = true, .shown = coherence ? &coherence->shown : nullptr},
+               frame);
 }
 
 AlgorithmInfo hzbAlgorithm() {

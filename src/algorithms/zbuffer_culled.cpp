@@ -8,13 +8,19 @@
 namespace hsr::algo {
 namespace {
 
-// The pyramid is rebuilt over each frame's depth buffer: the object keeps nothing between views.
+// The pyramid is rebuilt over each frame's depth buffer; with temporal=on the object keeps the
+// meshes the last frame showed.
 class ZbufferCulled final : public SceneAlgorithm {
  public:
   using SceneAlgorithm::SceneAlgorithm;
   void render(const Camera& camera, const RenderOptions& options, Frame& frame) override {
-    zbufferOcclusionCulled(scene_, camera, options, frame);
+    const bool temporal = params_.flag("temporal");
+    zbufferOcclusionCulled(scene_, camera, options, temporal ? &shown_ : nullptr, frame);
+    frame.stats.setDetail("temporal", temporal ? "on" : "off");
   }
+
+ private:
+  MeshesShown shown_;
 };
 
 }  // namespace
@@ -24,7 +30,10 @@ AlgorithmInfo zbufferCulledAlgorithm() {
   a.name = "zbuffer-culled";
   a.summary = "the textbook z-buffer with occlusion culling: meshes hidden behind what is drawn are dropped whole "
               "before set-up";
-  a.source = "Ukrainian paper (occlusion culling on the hierarchical z-buffer's pyramid)";
+  a.source = "Ukrainian paper (occlusion culling on the hierarchical z-buffer's pyramid; temporal coherence)";
+  a.params = {{"temporal", ParamType::Bool, "off", {}, -1e300, 1e300,
+               "temporal coherence: the meshes that showed in the previous frame drawn first, untested, as occluders, "
+               "and every other mesh tested against them (the first frame, or a new scene, has none)"}};
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.guarantee.condition = "up to the depth format's precision: z-fighting is counted as ambiguous";
   a.create = factoryOf<ZbufferCulled>();

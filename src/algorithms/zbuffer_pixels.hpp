@@ -74,6 +74,9 @@ class ZBufferPixels {
         frame_, n);
   }
 
+  /// Per pixel, 1 + the index of the triangle that wrote it last; 0 where none did.
+  std::span<const uint32_t> winners() const { return winner_; }
+
   void addMemory(Stats& st) const {
     st.addMemory("depth_buffer", depth_.size() * sizeof(T));
     st.addMemory("winner_ids", winner_.size() * sizeof(uint32_t));
