@@ -180,40 +180,60 @@ void writeZfight(std::ostream& o, const Json& results) {
   if (!gap.empty()) o << "</div>\n";
 }
 
+// A section of the report that is one table: heading, a paragraph (HTML), the column names, and
+// each row of `rows` as its cells (HTML) by `cells`.
+template <class Cells>
+void writeTableSection(std::ostream& o, const char* id, const char* title, const char* intro,
+                       std::initializer_list<const char*> columns, const Json& rows, Cells&& cells) {
+  o << "<h2 id=\"" << id << "\">" << title << "</h2>\n<p>" << intro << "</p>\n<table><tr>";
+  for (const char* c : columns) o << "<th>" << c << "</th>";
+  o << "</tr>\n";
+  for (const Json& r : rows) {
+    o << "<tr>";
+    for (const std::string& cell : cells(r)) o << "<td>" << cell << "</td>";
+    o << "</tr>\n";
+  }
+  o << "</table>\n";
+}
+
 void writeCoherence(std::ostream& o, const Json& results) {
   if (!results.contains("coherence")) return;
-  o << "<h2 id=\"coherence\">Temporal coherence</h2>\n<p>Occlusion culling over an orbit (<code>zbuffer-culled</code>, "
-       "one algorithm object per orbit): with <code>temporal=on</code> the meshes that showed in the previous frame are "
-       "drawn first, untested, as occluders, and every other mesh is tested against them. Triangles set up and time per "
-       "frame, and the frames whose face ids equal those without it.</p>\n<table><tr><th>scene</th><th>size</th>"
-       "<th>poses</th><th>temporal</th><th>triangles set up a frame</th><th>meshes carried a frame</th><th>median ms</th>"
-       "<th>frames identical</th></tr>\n";
-  for (const Json& r : results["coherence"])
-    o << "<tr><td>" << esc(r["scene"]) << "</td><td>" << esc(r["size"]) << "</td><td>" << r["poses"].get<int>()
-      << "</td><td>" << esc(r["temporal"]) << "</td><td>"
-      << fmt::format("{:.0f}", r["set_up_triangles_per_frame"].get<double>()) << "</td><td>"
-      << fmt::format("{:.1f}", r["meshes_carried_per_frame"].get<double>()) << "</td><td>"
-      << fmt::format("{:.2f}", r["median_ms"].get<double>()) << "</td><td>"
-      << (r.contains("frames_identical") ? std::to_string(r["frames_identical"].get<uint64_t>()) : "") << "</td></tr>\n";
-  o << "</table>\n";
+  writeTableSection(
+      o, "coherence", "Temporal coherence",
+      "Occlusion culling over an orbit (<code>zbuffer-culled</code>, one algorithm object per orbit): with "
+      "<code>temporal=on</code> the meshes that showed in the previous frame are drawn first, untested, as occluders, "
+      "and every other mesh is tested against them. Triangles set up and time per frame, and the frames whose face ids "
+      "equal those without it.",
+      {"scene", "size", "poses", "temporal", "triangles set up a frame", "meshes carried a frame", "median ms",
+       "frames identical"},
+      results["coherence"], [](const Json& r) {
+        return std::vector<std::string>{
+            esc(r["scene"]), esc(r["size"]), std::to_string(r["poses"].get<int>()), esc(r["temporal"]),
+            fmt::format("{:.0f}", r["set_up_triangles_per_frame"].get<double>()),
+            fmt::format("{:.1f}", r["meshes_carried_per_frame"].get<double>()),
+            fmt::format("{:.2f}", r["median_ms"].get<double>()),
+            r.contains("frames_identical") ? std::to_string(r["frames_identical"].get<uint64_t>()) : ""};
+      });
 }
 
 void writeDepthCompression(std::ostream& o, const Json& results) {
   if (!results.contains("depth_compression")) return;
-  o << "<h2 id=\"depth-compression\">Lossless depth compression</h2>\n<p>The final depth buffer in 8x8 blocks, each "
-       "kept as the smallest of: clear (1 byte), a plane in the stored values' bits with each value's residual packed "
-       "in the fewest bits, or raw (<code>hsr/depth_compression.hpp</code>); decompressed and compared bit for bit. "
-       "Traffic saved: a tiled renderer loads and stores each tile's depth once a frame, twice the buffer.</p>\n"
-       "<table><tr><th>scene</th><th>size</th><th>format</th><th>buffer bytes</th><th>compressed</th><th>ratio</th>"
-       "<th>blocks clear / plane / residuals / raw</th><th>traffic saved a frame</th><th>exact</th></tr>\n";
-  for (const Json& r : results["depth_compression"])
-    o << "<tr><td>" << esc(r["scene"]) << "</td><td>" << esc(r["size"]) << "</td><td>" << esc(r["format"]) << "</td><td>"
-      << num(r["buffer_bytes"]) << "</td><td>" << num(r["compressed_bytes"]) << "</td><td>"
-      << fmt::format("{:.1f}", r["ratio"].get<double>()) << "</td><td>" << num(r["clear_blocks"]) << " / "
-      << num(r["plane_blocks"]) << " / " << num(r["residual_blocks"]) << " / " << num(r["raw_blocks"]) << "</td><td>"
-      << num(r["traffic_saved_bytes"]) << "</td><td>" << (r["round_trip_exact"].get<bool>() ? "yes" : "no")
-      << "</td></tr>\n";
-  o << "</table>\n";
+  writeTableSection(
+      o, "depth-compression", "Lossless depth compression",
+      "The final depth buffer in 8x8 blocks, each kept as the smallest of: clear (1 byte), a plane in the stored "
+      "values' bits with each value's residual packed in the fewest bits, or raw "
+      "(<code>hsr/depth_compression.hpp</code>); decompressed and compared bit for bit. Traffic saved: a tiled "
+      "renderer loads and stores each tile's depth once a frame, twice the buffer.",
+      {"scene", "size", "format", "buffer bytes", "compressed", "ratio", "blocks clear / plane / residuals / raw",
+       "traffic saved a frame", "exact"},
+      results["depth_compression"], [](const Json& r) {
+        return std::vector<std::string>{
+            esc(r["scene"]), esc(r["size"]), esc(r["format"]), num(r["buffer_bytes"]), num(r["compressed_bytes"]),
+            fmt::format("{:.1f}", r["ratio"].get<double>()),
+            num(r["clear_blocks"]) + " / " + num(r["plane_blocks"]) + " / " + num(r["residual_blocks"]) + " / " +
+                num(r["raw_blocks"]),
+            num(r["traffic_saved_bytes"]), r["round_trip_exact"].get<bool>() ? "yes" : "no"};
+      });
 }
 
 // Chart.js charts built from the embedded results; the page records what rendered (and any
