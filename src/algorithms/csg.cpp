@@ -186,7 +186,9 @@ class CsgPeel final : public SceneAlgorithm {
     layer_.allocate(camera.width, camera.height, FrameOutputs::IdsAndDepth);
     if (frame.writes.empty()) layer_.writes.clear();
     else layer_.writes.assign(pixels, 0);
+    const size_t solids = tree_.solids();
     inside_.assign(pixels, 0);
+    crossings_.assign(pixels * solids, 0);
     open_.assign(pixels, 1);
     frontFacing_.assign(scene_.triangles.size(), 0);
     buffers_.forgetPeeledLayer();
@@ -231,8 +233,10 @@ class CsgPeel final : public SceneAlgorithm {
           const int solid = tree_.solidOf(uint32_t(tri));
           bool shows = solid < 0;
           if (!shows) {
+            int8_t& count = crossings_[i * solids + size_t(solid)];
+            count = int8_t(std::clamp(count + (frontFacing_[size_t(tri)] ? 1 : -1), -100, 100));
             const uint64_t bit = uint64_t(1) << solid;
-            inside_[i] = frontFacing_[size_t(tri)] ? inside_[i] | bit : inside_[i] & ~bit;
+            inside_[i] = count > 0 ? inside_[i] | bit : inside_[i] & ~bit;
             shows = tree_.contains(inside_[i]);
           }
           if (!shows) {
@@ -261,7 +265,7 @@ class CsgPeel final : public SceneAlgorithm {
     addFrameMemory(frameMemory, frame);
     total.addMemory("csg_frame", frameMemory.memory_bytes);  // (the layers' frame is in frame.*)
     total.addMemory("peeled_layer", buffers_.peeledWinner().capacity() * (sizeof(uint32_t) + sizeof(float)));
-    total.addMemory("csg_inside", inside_.capacity() * sizeof(uint64_t) + open_.capacity());
+    total.addMemory("csg_inside", inside_.capacity() * sizeof(uint64_t) + crossings_.capacity() + open_.capacity());
     total.addMemory("csg_facing", frontFacing_.capacity());
     total.setDetail("solids", uint64_t(tree_.solids()));
     total.setDetail("layers", uint64_t(layers));
@@ -273,6 +277,7 @@ class CsgPeel final : public SceneAlgorithm {
   CsgTree tree_;
   Frame layer_;                        // the layer just peeled: ids and exact depth
   std::vector<uint64_t> inside_;       // per pixel: bit s set while the ray is inside solid s
+  std::vector<int8_t> crossings_;      // per pixel and solid: entries less exits so far
   std::vector<uint8_t> open_;          // per pixel: 1 until its visible surface (or none) is found
   std::vector<uint8_t> frontFacing_;   // per scene triangle: front-facing from this camera
 };
