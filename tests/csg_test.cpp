@@ -48,18 +48,19 @@ TEST(Csg, TheTreeEvaluatesItsSetOperations) {
 }
 
 // The csg algorithm shows the reference's image on each built-in CSG scene with its own camera,
-// and needed more than one layer to (the union's visible surface is the first layer).
+// peeling at least three layers for the trees that cut or trim (a union seen from outside shows
+// its first layer).
 TEST(Csg, DepthPeelingMatchesTheReference) {
   for (const char* op : kOps) {
     const conformance::Outcome o = against("csg", csgScene(op));
     EXPECT_EQ(o.wrong, 0u) << op << "\n" << o.replay;
-    EXPECT_GT(o.covered, 5000u) << op;
+    EXPECT_GT(o.covered, 4000u) << op;
     const Scene scene = loadScene(csgScene(op));
     RenderOptions options;
     options.algorithm = "csg";
     const Frame frame = render(scene, resolveCamera(*scene.camera, 160, 120, scene.bounds()), options);
     EXPECT_EQ(frame.stats.detailCount("undecided_pixels"), 0u) << op;
-    EXPECT_GE(frame.stats.detailCount("layers").value_or(0), std::string(op) == "union" ? 2u : 3u) << op;
+    EXPECT_GE(frame.stats.detailCount("layers").value_or(0), std::string(op) == "union" ? 1u : 3u) << op;
   }
 }
 
@@ -151,11 +152,11 @@ TEST_F(CsgJson, LeavesNameEntriesByIndexOrName) {
 
 TEST_F(CsgJson, ABadTreeIsOneLineNamingTheFileAndLine) {
   const std::pair<const char*, const char*> cases[] = {
-      {R"({"xor": [0, 1]})", "unknown operation \"xor\""},
+      {R"({"xor": [0, 1]})", "unknown operation 'xor'"},
       {R"({"union": [0]})", "two or more nodes"},
       {R"({"union": [0, 7]})", "mesh index 7 is not one of meshes[0..2]"},
       {R"({"union": [0, -1]})", "mesh index -1"},
-      {R"({"union": ["a", "c"]})", "no mesh entry is named \"c\""},
+      {R"({"union": ["a", "c"]})", "no mesh entry is named 'c'"},
       {R"({"union": [0, "a"]})", "meshes[0] is named twice"},
       {R"({"union": [0, 1.5]})", "a node must be"},
       {R"({"union": [0, 1], "intersection": [1, 2]})", "a node must be"},

@@ -224,7 +224,7 @@ Scene makeCsg(const Args& args) {
     combine(CsgNode::Op::Difference, rounded,
             combine(CsgNode::Op::Union, combine(CsgNode::Op::Union, x, y), z));
   }
-  scene.camera = perspectiveCamera({2.6, 2.0, 3.4}, {0, 0, 0}, 40, 1, 10);
+  scene.camera = perspectiveCamera({2.6, 2.0, 3.4}, {0, 0, 0}, 48, 1, 10);
   return scene;
 }
 
