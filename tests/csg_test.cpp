@@ -64,6 +64,29 @@ TEST(Csg, DepthPeelingMatchesTheReference) {
   }
 }
 
+// The conformance suite judges csg on its CSG cases wherever every solid lies between the planes:
+// most of the seeded poses (the others cut a solid with the near or far plane), each checked
+// there with zero wrong pixels.
+TEST(Csg, TheSuiteJudgesMostOfItsCsgPoses) {
+  const conformance::Plan plan = conformance::fullPlan();
+  int cases = 0;
+  for (const conformance::Plan::Case& c : plan.cases) {
+    const Scene scene = conformance::load(c.scene);
+    if (scene.csg.empty()) continue;
+    ++cases;
+    int judged = 0;
+    for (const conformance::Pose& pose : conformance::posesAround(scene, c.poses, std::hash<std::string>{}(c.scene) & 0xffff)) {
+      const Camera camera = resolveCamera(pose.spec, 64, 48, scene.bounds());
+      if (!algo::csgSolidsWithinDepthRange(scene, camera)) continue;
+      ++judged;
+      const conformance::Outcome o = conformance::run({findAlgorithm("csg"), {}}, c.scene, scene, pose, 64, 48, DepthFormat());
+      EXPECT_EQ(o.wrong, 0u) << o.replay;
+    }
+    EXPECT_GE(judged * 2, c.poses) << c.scene << ": " << judged << " of " << c.poses << " poses judged";
+  }
+  EXPECT_EQ(cases, 4);
+}
+
 // A plain z-buffer draws the solids as meshes: wrong where the tree cuts (difference) or trims
 // (intersection), right for a union seen from outside (its visible surface is the nearest).
 TEST(Csg, APlainZbufferOfACsgSceneIsWrongWhereTheTreeCutsOrTrims) {

@@ -22,6 +22,9 @@ namespace hsr::algo {
 
 CsgTree::CsgTree(const Scene& scene) : nodes_(scene.csg), solidOfTriangle_(scene.triangles.size(), -1) {
   const std::string where = scene.source + ": csg: ";
+  if (nodes_.size() >= 2 * kMaxCsgSolids)  // a tree of at most kMaxCsgSolids leaves has fewer nodes
+    throw InputError(where + std::to_string(nodes_.size()) + " nodes (a tree of " + std::to_string(kMaxCsgSolids) +
+                     " solids has fewer)");
   std::vector<int> solidOfFace(scene.faceCount(), -1);
   solidOfNode_.assign(nodes_.size(), 0);
   for (size_t i = 0; i < nodes_.size(); ++i) {
@@ -43,8 +46,8 @@ CsgTree::CsgTree(const Scene& scene) : nodes_(scene.csg), solidOfTriangle_(scene
 }
 
 bool CsgTree::contains(uint64_t inside) const {
-  bool value[2 * kMaxCsgSolids];  // a tree of at most kMaxCsgSolids leaves: fewer nodes
-  const size_t count = std::min(nodes_.size(), std::size(value));
+  bool value[2 * kMaxCsgSolids];  // (the constructor checked the count)
+  const size_t count = nodes_.size();
   for (size_t i = 0; i < count; ++i) {
     const CsgNode& n = nodes_[i];
     switch (n.op) {
