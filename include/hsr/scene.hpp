@@ -88,7 +88,7 @@ struct CsgNode {
   uint32_t first = 0, count = 0;  // Solid: its faces
   uint32_t left = 0, right = 0;   // an operation: its operands, indices of earlier nodes
 };
-/// Solids a CSG tree may hold, at most (the csg algorithm keeps one bit per solid and pixel).
+/// Solids a CSG tree may hold, at most (the csg algorithm keeps a 64-bit mask of them per pixel).
 inline constexpr size_t kMaxCsgSolids = 64;
 
 struct Scene {
