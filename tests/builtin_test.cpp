@@ -20,7 +20,7 @@ namespace {
 
 const std::vector<std::string> kSceneNames = {"cubes",         "random",         "sphere",           "layers",
                                               "city",          "clutter",        "painter-midpoint", "painter-cycle",
-                                              "interpenetrate", "glass", "zfight"};
+                                              "interpenetrate", "glass", "zfight", "csg"};
 
 // Each default scene is generated once per test run (the sphere has a million triangles).
 const Scene& defaultScene(const std::string& name) {
@@ -191,6 +191,7 @@ TEST(Builtin, DefaultCountsMatchTheDocs) {
       {"interpenetrate", {2, 4, 2, 8}},
       {"glass", {6, 12, 6, 24}},
       {"zfight", {2, 4, 2, 8}},
+      {"csg", {2886, 2892, 2, 1450}},
   };
   for (const auto& name : kSceneNames) {
     SCOPED_TRACE(name);
@@ -288,7 +289,7 @@ TEST(Builtin, ParsesParameters) {
 TEST(Builtin, BadSpecsThrowClearErrors) {
   EXPECT_EQ(errorOf("teapot"),
             "builtin:teapot: unknown built-in scene (known: cubes, random, sphere, layers, city, clutter, "
-            "painter-midpoint, painter-cycle, interpenetrate, glass, zfight)");
+            "painter-midpoint, painter-cycle, interpenetrate, glass, zfight, csg)");
   EXPECT_EQ(errorOf("random?x=1"), "builtin:random: unknown parameter 'x' (known: n, seed, size)");
   EXPECT_EQ(errorOf("cubes?seed=1"),
             "builtin:cubes: unknown parameter 'seed' (known: this scene has none)");
@@ -348,7 +349,7 @@ TEST(Builtin, DefaultCameraSeesTheBoundsCentre) {
 // between the clipping planes. (The city's ground reaches behind the camera, as streets do.)
 TEST(Builtin, FigureScenesFitTheirDefaultView) {
   for (const std::string name : {"cubes", "random", "painter-midpoint", "painter-cycle",
-                                 "interpenetrate", "layers", "zfight", "sphere"}) {
+                                 "interpenetrate", "layers", "zfight", "sphere", "csg"}) {
     SCOPED_TRACE(name);
     const Scene& scene = defaultScene(name);
     const Camera camera = defaultCamera(scene, 64, 48);
@@ -381,6 +382,11 @@ TEST(Builtin, ClosedMeshesWindOutwards) {
     if (mesh.name != "ground") {
       EXPECT_GT(signedVolume(city, mesh.firstFace, mesh.faceCount), 1) << mesh.name;
     }
+
+  for (const char* op : {"difference", "intersection", "union", "mixed"}) {
+    const Scene csg = makeBuiltin(std::string("csg?op=") + op);
+    for (const auto& mesh : csg.meshes) EXPECT_GT(signedVolume(csg, mesh.firstFace, mesh.faceCount), 0.1) << mesh.name;
+  }
 
   const Scene clutter = makeBuiltin("clutter?n=30&detail=3");
   for (const auto& mesh : clutter.meshes)

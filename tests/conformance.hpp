@@ -91,7 +91,8 @@ Plan fullPlan();
 /// scenes, sizes and formats, fewer poses; docs/testing.md).
 Plan suitePlan();
 
-/// Every violation of `variant`'s guarantee on `plan`, one message each (empty: it conforms).
+/// Every violation of `variant`'s guarantee on `plan`, one message each (empty: it conforms). The
+/// plan's scenes with a CSG tree are checked only for algorithms that declare Capability::Csg.
 std::vector<std::string> check(const Variant& variant, const Plan& plan);
 
 }  // namespace hsr::conformance

@@ -105,6 +105,8 @@ class Algorithm {
 enum class Capability : uint8_t {
   None = 0,
   PaintsInOrder = 1,  // paints polygons back to front, so --svg can write them as vector polygons
+  Csg = 2,            // shows a scene's CSG tree (Scene::csg) as its result; the conformance suite
+                      // judges only these on CSG scenes (the others draw the solids as plain meshes)
 };
 
 /// Makes the algorithm for a finalized scene with checked parameters.

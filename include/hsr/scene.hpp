@@ -80,6 +80,17 @@ struct Light {
   dvec3 vector{0, 0, 0};  // Directional: the direction the light travels (not zero); Point: its position
 };
 
+/// One node of a scene's CSG tree (Scene::csg; docs/scene-json.md "csg"): a solid, the closed
+/// mesh made of faces [first, first + count), or a set operation of two earlier nodes.
+struct CsgNode {
+  enum class Op : uint8_t { Solid, Union, Intersection, Difference };
+  Op op = Op::Solid;
+  uint32_t first = 0, count = 0;  // Solid: its faces
+  uint32_t left = 0, right = 0;   // an operation: its operands, indices of earlier nodes
+};
+/// Solids a CSG tree may hold, at most (the csg algorithm keeps a 64-bit mask of them per pixel).
+inline constexpr size_t kMaxCsgSolids = 64;
+
 struct Scene {
   std::string source;  // file name or "builtin:NAME"; used in error messages
 
@@ -103,6 +114,11 @@ struct Scene {
   // (MeshRange::firstVertex, vertexCount), so that a renderer may transform a mesh's vertices
   // only when it draws the mesh.
   bool meshVerticesApart = false;
+
+  // A CSG tree over the scene's faces, its root last (empty: none). The algorithms that declare
+  // Capability::Csg show the tree's result (faces outside its solids as plain surfaces); the
+  // others draw every face as a plain surface.
+  std::vector<CsgNode> csg;
 
   std::optional<CameraSpec> camera;  // a camera stored in the scene file, if any
   std::optional<Light> light;        // a light stored in the scene file, if any

@@ -11,6 +11,7 @@
 
 #include <memory>
 
+#include "algorithms/bvh.hpp"
 #include "algorithms/draw.hpp"
 #include "algorithms/polygon_split.hpp"
 
@@ -128,6 +129,58 @@ class TiledZBuffer {
   struct State;
   std::unique_ptr<State> state_;
 };
+
+/// A scene's CSG tree (Scene::csg) as the algorithms evaluate it (csg.cpp): each triangle's solid,
+/// and the tree's value at a point inside a set of solids.
+class CsgTree {
+ public:
+  /// Throws InputError for a malformed tree (operands after their node, solids overlapping or
+  /// outside the scene, more than kMaxCsgSolids solids).
+  explicit CsgTree(const Scene& scene);
+  /// The solid (0..solids() - 1) triangle t's face belongs to, or -1: a plain surface.
+  int solidOf(uint32_t t) const { return solidOfTriangle_[t]; }
+  /// Whether a point inside exactly the solids of `inside` (bit s: solid s) lies in the tree's result.
+  bool contains(uint64_t inside) const;
+  size_t solids() const { return solids_; }
+
+ private:
+  std::vector<CsgNode> nodes_;
+  std::vector<uint8_t> solidOfNode_;
+  std::vector<int8_t> solidOfTriangle_;
+  size_t solids_ = 0;
+};
+
+/// The exact reference of a scene with a CSG tree (csg.cpp; raycast and --verify use it): per
+/// pixel ray, every hit of the scene's triangles (the watertight test, bvh.hpp), sorted; the
+/// solids holding the ray's start from the hits beyond it (past the far plane too); the visible
+/// surface is the first hit of a plain surface, or the first at which the tree's value changes,
+/// within the far plane. Queries are const and safe from many threads at once.
+class CsgRays {
+ public:
+  CsgRays(const Scene& scene, const Camera& camera);
+  /// What one thread's queries reuse.
+  struct Scratch {
+    std::vector<RayHit> hits;
+    std::vector<int> solid, facing;
+  };
+  /// The visible surface through pixel position (px, py): its triangle and eye depth t.
+  RayHit tracePixel(double px, double py, Scratch& scratch, TraceCounters& counters) const;
+  uint64_t degenerateTriangles() const { return bvh_.degenerateTriangles(); }
+  uint64_t memoryBytes() const { return bvh_.memoryBytes(); }
+
+ private:
+  const Scene& scene_;
+  const Camera& camera_;
+  const Camera unbounded_;  // the camera without its far plane
+  const CameraSpaceBvh bvh_;
+  const CsgTree tree_;
+};
+/// Whether every vertex of the tree's solids lies strictly between the near and far planes
+/// (true without a tree): then every pixel's ray starts outside every solid.
+bool csgSolidsWithinDepthRange(const Scene& scene, const Camera& camera);
+/// Throws InputError when `options` cannot show the scene's CSG tree (culling removes the faces
+/// it counts).
+void checkCsgOptions(const Scene& scene, const RenderOptions& options);
 
 /// Adds the frame's sized buffers to st.memory ("frame.depth", "frame.color", ...): part of every
 /// algorithm's memory.

@@ -150,6 +150,25 @@ struct BlendUnderRule {
   }
 };
 
+// Depth peeling: the z-buffer among the fragments that come after the layer peeled before in the
+// order (stored depth, drawing order), so that layer after layer visits every fragment of a pixel
+// once, ties in depth included.
+struct DepthPeelRule {
+  static constexpr WriteRule kRule = WriteRule::DepthPeel;
+  static constexpr bool kDepth = true, kColorAtResolve = true, kStopsWhenFull = false;
+  template <class P, class T>
+  static bool write(P& p, const Fragment<T>& f, DrawCounters& n) {
+    if (!p.peeledWinner.empty()) {
+      const uint32_t before = p.peeledWinner[f.idx];
+      if (!before) return false;  // the layer before was empty here: nothing lies beyond
+      const T floor = p.peeledDepth[f.idx];
+      ++n.depthTests;
+      if (!(storedNearer<P::kMapping>(double(floor), double(f.z)) || (floor == f.z && f.i + 1 > before))) return false;
+    }
+    return DepthTestRule::write(p, f, n);
+  }
+};
+
 // One frame's per-pixel state, for depth storage S and mapping M (the depth buffer is used by the
 // depth rules only): what the rules read and write.
 template <DepthStorage S, DepthMapping M>
@@ -165,6 +184,8 @@ struct Pixels {
   std::vector<uint32_t>& winner;   // 1 + the index of the winning (last written) triangle, 0 = none
   std::vector<double> nearest;     // DepthTestBlend: the eye depth of the winner's fragment
   std::vector<UnderSum> sums;      // BlendUnder: each pixel's blend so far
+  const std::vector<T>& peeledDepth;           // DepthPeel: the layer peeled before (DrawBuffers)
+  const std::vector<uint32_t>& peeledWinner;
 
   Rgba8 colorOf(uint32_t i) const { return algo::colorOf(tris[i], shade, derived); }
 };
@@ -187,7 +208,9 @@ class FragmentWriter {
            buffers.depth<T>(),
            buffers.winner(),
            {},
-           {}} {
+           {},
+           buffers.peeledDepth<T>(),
+           buffers.peeledWinner()} {
     const size_t pixels = size_t(cam.width) * size_t(cam.height);
     if constexpr (R::kDepth) p_.depth.assign(pixels, clear_);
     else p_.depth.clear();
@@ -339,6 +362,7 @@ void drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawR
     case WriteRule::Blend: return withRule.template operator()<BlendRule>();
     case WriteRule::DepthTestBlend: return withRule.template operator()<DepthTestBlendRule>();
     case WriteRule::BlendUnder: return withRule.template operator()<BlendUnderRule>();
+    case WriteRule::DepthPeel: return withRule.template operator()<DepthPeelRule>();
   }
 }
 
@@ -407,6 +431,7 @@ const char* writeRuleName(WriteRule rule) {
     case WriteRule::Blend: return "blend";
     case WriteRule::DepthTestBlend: return "depth-test-blend";
     case WriteRule::BlendUnder: return "blend-under";
+    case WriteRule::DepthPeel: return "depth-peel";
   }
   return "?";
 }
@@ -469,7 +494,8 @@ void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& op
 void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& options, WriteRule rule,
                DrawRaster raster, const OrderFn& order, DrawBuffers& buffers, Frame& frame,
                const DerivedScene* derived) {
-  const bool depthTested = rule == WriteRule::DepthTest || rule == WriteRule::DepthTestBlend;
+  const bool depthTested =
+      rule == WriteRule::DepthTest || rule == WriteRule::DepthTestBlend || rule == WriteRule::DepthPeel;
   uint64_t skippedFull = 0;
   drawFrame(scene, camera, options, {.order = order, .depthTested = depthTested, .derived = derived},
             [&](FrameWork& work, const TriangleShader& shade) {

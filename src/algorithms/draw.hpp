@@ -31,6 +31,8 @@ enum class WriteRule : uint8_t {
                    // and colour, a transparent one writes no depth and composites its colour over
   BlendUnder,      // the reverse painter's with transparency: front to back, each fragment composited under what
                    // the pixel holds until it is opaque; ids the first (nearest); the background under all at the end
+  DepthPeel,       // depth peeling: DepthTest among the fragments beyond the layer peeled before
+                   // (DrawBuffers::keepPeeledLayer), ordered by (stored depth, drawing order)
 };
 const char* writeRuleName(WriteRule rule);
 
@@ -61,11 +63,35 @@ class DrawBuffers {
   /// Per pixel: 1 + the index of the winning (or last written) triangle, 0 = none.
   std::vector<uint32_t>& winner() { return winner_; }
 
+  /// DepthPeel: the layer peeled before, its depth values and winners (empty: none yet, so the
+  /// next layer is the nearest).
+  template <class T>
+  std::vector<T>& peeledDepth() {
+    if constexpr (std::is_same_v<T, uint16_t>) return peeled16_;
+    else if constexpr (std::is_same_v<T, float>) return peeledF32_;
+    else return peeled32_;
+  }
+  std::vector<uint32_t>& peeledWinner() { return peeledWinner_; }
+  /// The layer just drawn under DepthPeel becomes the one the next layer lies beyond.
+  void keepPeeledLayer() {
+    depth16_.swap(peeled16_);
+    depth32_.swap(peeled32_);
+    depthF32_.swap(peeledF32_);
+    winner_.swap(peeledWinner_);
+  }
+  /// Forgets the peeled layer: the next DepthPeel layer is the nearest.
+  void forgetPeeledLayer() {
+    peeled16_.clear();
+    peeled32_.clear();
+    peeledF32_.clear();
+    peeledWinner_.clear();
+  }
+
  private:
-  std::vector<uint16_t> depth16_;
-  std::vector<uint32_t> depth32_;
-  std::vector<float> depthF32_;
-  std::vector<uint32_t> winner_;
+  std::vector<uint16_t> depth16_, peeled16_;
+  std::vector<uint32_t> depth32_, peeled32_;
+  std::vector<float> depthF32_, peeledF32_;
+  std::vector<uint32_t> winner_, peeledWinner_;
 };
 
 /// The counters of the statistics, as every algorithm counts them.

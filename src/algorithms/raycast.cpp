@@ -1,20 +1,27 @@
 // Ray casting, the image-space algorithm of the KTH thesis and the exact reference of --verify:
 // one ray per pixel centre, nearest hit in double precision with a watertight test, no
-// sub-pixel snapping and no depth quantization. Rows run in parallel; any thread count gives
-// the same bits. Called through render() (registry.cpp).
+// sub-pixel snapping and no depth quantization. A scene with a CSG tree is cast as the tree's
+// result (CsgRays, csg.cpp). Rows run in parallel; any thread count gives the same bits. Called
+// through render() (registry.cpp).
 #include "algorithms/algorithms.hpp"
 #include "algorithms/bvh.hpp"
 #include "core/parallel.hpp"
 #include "scene/shading.hpp"
 #include "core/timer.hpp"
 
+#include <optional>
+
 namespace hsr::algo {
 namespace {
 
 void raycast(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame) {
   Timer timer;
+  checkCsgOptions(scene, options);
   frame.resize(camera.width, camera.height, options.background, resolveThreads(options.threads));
-  const CameraSpaceBvh bvh(scene, camera);
+  std::optional<CameraSpaceBvh> bvh;
+  std::optional<CsgRays> csg;
+  if (scene.csg.empty()) bvh.emplace(scene, camera);
+  else csg.emplace(scene, camera);
   Stats& st = frame.stats;
   st.addTime("build", timer.lap());
 
@@ -29,8 +36,10 @@ void raycast(const Scene& scene, const Camera& camera, const RenderOptions& opti
     RowCounters& row = rows[y];
     int32_t shadedTriangle = -1;  // neighbouring pixels mostly show the same triangle
     Rgba8 shade;
+    CsgRays::Scratch scratch;
     for (int x = 0; x < camera.width; ++x) {
-      const RayHit hit = bvh.tracePixel(x + 0.5, double(y) + 0.5, options.cull, row.trace);
+      const RayHit hit = csg ? csg->tracePixel(x + 0.5, double(y) + 0.5, scratch, row.trace)
+                             : bvh->tracePixel(x + 0.5, double(y) + 0.5, options.cull, row.trace);
       if (!hit.found()) continue;
       if (hit.triangle != shadedTriangle) {
         shadedTriangle = hit.triangle;
@@ -48,7 +57,7 @@ void raycast(const Scene& scene, const Camera& camera, const RenderOptions& opti
   st.addTime("trace", timer.lap());
 
   // (name, parameters, image size, faces and triangles: render() sets them)
-  st.triangles_degenerate = bvh.degenerateTriangles();
+  st.triangles_degenerate = csg ? csg->degenerateTriangles() : bvh->degenerateTriangles();
   st.depth_tests = st.depth_writes = st.covered_pixels = 0;
   for (const RowCounters& row : rows) {
     st.depth_tests += row.trace.tests;
@@ -56,7 +65,7 @@ void raycast(const Scene& scene, const Camera& camera, const RenderOptions& opti
     st.covered_pixels += row.covered;
   }
   st.color_writes = st.covered_pixels;  // each covered pixel is written once
-  st.addMemory("bvh", bvh.memoryBytes());
+  st.addMemory("bvh", csg ? csg->memoryBytes() : bvh->memoryBytes());
   addFrameMemory(st, frame);
 }
 
@@ -74,10 +83,12 @@ class Raycast final : public SceneAlgorithm {
 AlgorithmInfo raycastAlgorithm() {
   AlgorithmInfo a;
   a.name = "raycast";
-  a.summary = "ray casting: one ray per pixel centre, the nearest hit in double precision; the exact reference";
+  a.summary = "ray casting: one ray per pixel centre, the nearest hit in double precision (a CSG tree's result "
+              "from all the hits); the exact reference";
   a.source = "KTH thesis";
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.guarantee.condition = "it is the reference";
+  a.capability = Capability::Csg;
   a.create = factoryOf<Raycast>();
   return a;
 }

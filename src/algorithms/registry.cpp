@@ -24,7 +24,8 @@
   X(hzb)                  \
   X(midpoint)             \
   X(newell)               \
-  X(abuffer)
+  X(abuffer)              \
+  X(csg)
 
 namespace hsr {
 namespace algo {

@@ -108,13 +108,16 @@ bool depthAmbiguous(const PlaneDepths& planes, const Scene& scene, const DepthFo
 // reference's face and the frame's face differs from it, so "the five rays see more than one
 // face, or see the frame's face" is the same as "an offset ray sees a face other than the
 // reference's".
-bool edgeAmbiguous(const algo::CameraSpaceBvh& bvh, const Scene& scene, Cull cull, int32_t refFace, double px,
-                   double py) {
+// With a CSG tree, the offset rays see the tree's result (csg: CsgRays).
+bool edgeAmbiguous(const algo::CameraSpaceBvh& bvh, const algo::CsgRays* csg, const Scene& scene, Cull cull,
+                   int32_t refFace, double px, double py) {
   static constexpr double offsets[4][2] = {
       {kEdgeOffset, 0}, {-kEdgeOffset, 0}, {0, kEdgeOffset}, {0, -kEdgeOffset}};
   algo::TraceCounters unused;
+  algo::CsgRays::Scratch scratch;
   for (const auto& o : offsets) {
-    const algo::RayHit hit = bvh.tracePixel(px + o[0], py + o[1], cull, unused);
+    const algo::RayHit hit = csg ? csg->tracePixel(px + o[0], py + o[1], scratch, unused)
+                                 : bvh.tracePixel(px + o[0], py + o[1], cull, unused);
     const int32_t face = hit.found() ? int32_t(scene.triangles[size_t(hit.triangle)].face) : -1;
     if (face != refFace) return true;
   }
@@ -185,6 +188,8 @@ VerifyResult verifyPixels(const Scene& scene, const Camera& camera, const Render
   if (differing.empty()) return result;
 
   const algo::CameraSpaceBvh bvh(scene, camera);
+  std::optional<algo::CsgRays> csg;
+  if (!scene.csg.empty()) csg.emplace(scene, camera);
   const PlaneDepths planes(scene, camera, options.depthFormat);
   const dmat4 pixelFromWorld = camera.pixelFromCamera * camera.cameraFromWorld;
   std::vector<uint8_t> wrong(differing.size());
@@ -194,7 +199,7 @@ VerifyResult verifyPixels(const Scene& scene, const Camera& camera, const Render
     const double px = x + 0.5, py = y + 0.5;
     const bool ambiguous =
         depthAmbiguous(planes, scene, options.depthFormat, frame.triangleId[i], reference.triangleId[i], px, py) ||
-        edgeAmbiguous(bvh, scene, options.cull, reference.faceId[i], px, py) ||
+        edgeAmbiguous(bvh, csg ? &*csg : nullptr, scene, options.cull, reference.faceId[i], px, py) ||
         nearTriangleEdge(scene, pixelFromWorld, frame.triangleId[i], px, py) ||
         nearTriangleEdge(scene, pixelFromWorld, reference.triangleId[i], px, py);
     wrong[k] = !ambiguous;

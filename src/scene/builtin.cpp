@@ -152,6 +152,13 @@ const std::vector<SceneDef>& sceneDefs() {
        "two nearly coplanar polygons, far/near = 10^4: u16 depth fights, f32:reversed does not",
        {realParam("gap", "1e-4", 0, 0.5, "distance between the surfaces relative to eye depth")},
        makeZfight},
+      {"csg",
+       "closed solids and a CSG tree over them: a cube minus a sphere, a cube and a sphere intersected or "
+       "united, or the rounded cube minus three crossed bars",
+       {choiceParam("op", {"difference", "intersection", "union", "mixed"},
+                    "the tree: cube - sphere, cube & sphere, cube | sphere, or (cube & sphere) - (three bars)"),
+        integerParam("detail", 12, 1, 200, "each sphere has 20 detail^2 triangles")},
+       makeCsg, [](const Args& a) { return 20.0 * double(a.integer("detail") * a.integer("detail")) + 36; }},
   };
   return defs;
 }

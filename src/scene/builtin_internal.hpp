@@ -110,6 +110,7 @@ Scene makeSphere(const Args&);
 Scene makeLayers(const Args&);
 Scene makeCity(const Args&);
 Scene makeClutter(const Args&);
+Scene makeCsg(const Args&);
 
 /// Largest triangle count any generator may produce: guards memory against absurd parameters.
 inline constexpr int64_t kMaxTriangles = 50'000'000;

@@ -179,6 +179,55 @@ Scene makeSphere(const Args& args) {
   return scene;
 }
 
+// Closed solids and a CSG tree over them (Scene::csg), for the csg algorithm and its reference:
+// a cube minus a sphere at its corner, a cube intersected with a sphere (a rounded cube), a cube
+// united with a sphere, or the rounded cube minus three crossed bars. No two solids share a
+// plane, so the tree's surfaces meet along curves, not in coplanar patches.
+Scene makeCsg(const Args& args) {
+  const std::string& op = args.text("op");
+  const auto K = uint32_t(args.integer("detail"));
+  Scene scene;
+  auto solid = [&](uint32_t firstFace) {
+    scene.csg.push_back({CsgNode::Op::Solid, firstFace, uint32_t(scene.faceCount()) - firstFace, 0, 0});
+    return uint32_t(scene.csg.size() - 1);
+  };
+  auto combine = [&](CsgNode::Op kind, uint32_t left, uint32_t right) {
+    scene.csg.push_back({kind, 0, 0, left, right});
+    return uint32_t(scene.csg.size() - 1);
+  };
+  auto box = [&](const char* name, const dvec3& half, Rgba8 color) {
+    const uint32_t first = uint32_t(scene.faceCount());
+    scene.beginMesh(name);
+    addBox(scene, dvec3(0.0), dmat3(1.0), half, [&](int k) { return shade(color, faceShade(k)); });
+    return solid(first);
+  };
+  auto sphere = [&](const dvec3& centre, double radius) {
+    const uint32_t first = uint32_t(scene.faceCount());
+    scene.beginMesh("sphere");
+    addGeodesicSphere(
+        scene, K, [&](const dvec3& p) { return centre + radius * p; },
+        [](uint32_t f) { return shade(Rgba8{90, 150, 230, 255}, 0.8 + 0.2 * double(f % 2)); });
+    return solid(first);
+  };
+  const uint32_t cube = box("cube", dvec3(1.0), Rgba8{230, 160, 70, 255});
+  if (op == "difference") {
+    combine(CsgNode::Op::Difference, cube, sphere(dvec3(0.75), 1.0));
+  } else if (op == "intersection") {
+    combine(CsgNode::Op::Intersection, cube, sphere(dvec3(0.0), 1.35));
+  } else if (op == "union") {
+    combine(CsgNode::Op::Union, cube, sphere(dvec3(0.9), 0.8));
+  } else {  // mixed
+    const uint32_t rounded = combine(CsgNode::Op::Intersection, cube, sphere(dvec3(0.0), 1.35));
+    const uint32_t x = box("bar-x", {1.5, 0.45, 0.45}, Rgba8{120, 200, 110, 255});
+    const uint32_t y = box("bar-y", {0.42, 1.5, 0.42}, Rgba8{120, 200, 110, 255});
+    const uint32_t z = box("bar-z", {0.39, 0.39, 1.5}, Rgba8{120, 200, 110, 255});
+    combine(CsgNode::Op::Difference, rounded,
+            combine(CsgNode::Op::Union, combine(CsgNode::Op::Union, x, y), z));
+  }
+  scene.camera = perspectiveCamera({2.6, 2.0, 3.4}, {0, 0, 0}, 48, 1, 10);
+  return scene;
+}
+
 // N rounded objects (ellipsoids: geodesic spheres of 20 K^2 triangles, stretched and turned at
 // random) scattered over a square floor, seen from its edge at eye level: many curved meshes
 // hiding each other, as in a cluttered room or yard. Their triangles lie on hundreds of planes,

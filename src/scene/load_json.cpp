@@ -201,6 +201,91 @@ Light readLight(const json& v, const std::string& path, std::string_view text) {
   return light;
 }
 
+// The faces of one mesh entry in the merged scene, and the name it was given.
+struct EntryFaces {
+  uint32_t first = 0, count = 0;
+  std::string name;
+};
+
+// Scene JSON's "csg": a node is a mesh entry, by its index in "meshes" or its "name", or an object
+// {"union" | "intersection" | "difference": [two or more nodes]} (a difference takes the rest from
+// the first). Appended to Scene::csg in postfix order, root last; errors "file:line: csg: problem".
+class CsgReader {
+ public:
+  CsgReader(const std::string& path, std::string_view text, const std::vector<EntryFaces>& entries, Scene& scene)
+      : entries_(entries), scene_(scene), used_(entries.size(), false) {
+    const size_t line = keyLine(text, "csg");
+    where_ = path + (line ? ":" + std::to_string(line) : "") + ": csg: ";
+  }
+
+  void read(const json& root) { node(root, 0); }
+
+ private:
+  static constexpr int kMaxDepth = 64;
+
+  [[noreturn]] void fail(const std::string& problem) const { throw InputError(where_ + problem); }
+
+  uint32_t node(const json& v, int depth) {
+    if (depth > kMaxDepth) fail("nested more than " + std::to_string(kMaxDepth) + " deep");
+    if (v.is_number_integer() || v.is_number_unsigned() || v.is_string()) return solid(entryOf(v));
+    if (!v.is_object() || v.size() != 1)
+      fail("a node must be a mesh entry (its index or name) or an object with one key: 'union', 'intersection' "
+           "or 'difference'");
+    const auto item = v.items().begin();
+    const std::string& op = item.key();
+    CsgNode::Op kind;
+    if (op == "union") kind = CsgNode::Op::Union;
+    else if (op == "intersection") kind = CsgNode::Op::Intersection;
+    else if (op == "difference") kind = CsgNode::Op::Difference;
+    else fail("unknown operation " + quote(op) + " (expected 'union', 'intersection' or 'difference')");
+    const json& operands = item.value();
+    if (!operands.is_array() || operands.size() < 2) fail("'" + op + "' needs an array of two or more nodes");
+    uint32_t acc = node(operands[0], depth + 1);
+    if (kind == CsgNode::Op::Difference && operands.size() > 2) {  // first - (rest united)
+      uint32_t rest = node(operands[1], depth + 1);
+      for (size_t k = 2; k < operands.size(); ++k) rest = push({CsgNode::Op::Union, 0, 0, rest, node(operands[k], depth + 1)});
+      return push({kind, 0, 0, acc, rest});
+    }
+    for (size_t k = 1; k < operands.size(); ++k) acc = push({kind, 0, 0, acc, node(operands[k], depth + 1)});
+    return acc;
+  }
+
+  size_t entryOf(const json& v) const {
+    if (v.is_string()) {
+      const std::string name = v.get<std::string>();
+      size_t found = entries_.size();
+      for (size_t i = 0; i < entries_.size(); ++i)
+        if (!name.empty() && entries_[i].name == name) {
+          if (found != entries_.size()) fail("two mesh entries are named " + quote(name) + " (name it by index)");
+          found = i;
+        }
+      if (found == entries_.size()) fail("no mesh entry is named " + quote(name));
+      return found;
+    }
+    if (v.is_number_unsigned() && v.get<uint64_t>() < entries_.size()) return size_t(v.get<uint64_t>());
+    fail("mesh index " + v.dump() + " is not one of meshes[0.." + std::to_string(entries_.size() - 1) + "]");
+  }
+
+  uint32_t solid(size_t entry) {
+    if (used_[entry]) fail("meshes[" + std::to_string(entry) + "] is named twice (each mesh is one solid)");
+    used_[entry] = true;
+    if (entries_[entry].count == 0) fail("meshes[" + std::to_string(entry) + "] has no faces");
+    if (++solids_ > kMaxCsgSolids) fail("more than " + std::to_string(kMaxCsgSolids) + " solids");
+    return push({CsgNode::Op::Solid, entries_[entry].first, entries_[entry].count, 0, 0});
+  }
+
+  uint32_t push(const CsgNode& n) {
+    scene_.csg.push_back(n);
+    return uint32_t(scene_.csg.size() - 1);
+  }
+
+  const std::vector<EntryFaces>& entries_;
+  Scene& scene_;
+  std::vector<bool> used_;
+  size_t solids_ = 0;
+  std::string where_;
+};
+
 // The file's root object, checked: its keys, and a non-empty list of meshes.
 json sceneRoot(const std::string& path, std::string_view bytes) {
   json root;
@@ -211,8 +296,9 @@ json sceneRoot(const std::string& path, std::string_view bytes) {
   }
   if (!root.is_object()) throw InputError(path + ": a scene file must be a JSON object");
   for (const auto& item : root.items())
-    if (item.key() != "meshes" && item.key() != "camera" && item.key() != "light")
-      throw InputError(path + ": unknown key " + quote(item.key()) + " (expected 'meshes', 'camera' and 'light')");
+    if (item.key() != "meshes" && item.key() != "camera" && item.key() != "light" && item.key() != "csg")
+      throw InputError(path + ": unknown key " + quote(item.key()) +
+                       " (expected 'meshes', 'camera', 'light' and 'csg')");
   if (!root.contains("meshes") || !root.at("meshes").is_array() || root.at("meshes").empty())
     throw InputError(path + ": 'meshes' must be a non-empty array");
   return root;
@@ -263,6 +349,10 @@ Scene loadSceneJson(const std::string& path, std::string_view bytes, LoadContext
   scene.source = path;
   const fs::path folder = fs::path(path).parent_path();
   const json& meshes = root.at("meshes");
+  const bool csg = root.contains("csg");
+  if (csg && (entries.first > 0 || entries.end < meshes.size()))
+    throw InputError(path + ": a 'csg' tree needs every mesh entry: the file cannot be loaded in shares");
+  std::vector<EntryFaces> entryFaces;
   for (size_t i = entries.first; i < std::min(entries.end, meshes.size()); ++i) {
     EntryReader entry(path, i, meshes[i]);
     entry.checkKeys();
@@ -289,8 +379,11 @@ Scene loadSceneJson(const std::string& path, std::string_view bytes, LoadContext
       }
       sub.problems = {};  // generated finalized: the merged scene's finalize() redoes its findings
     }
+    const uint32_t firstFace = uint32_t(scene.faceCount());
     append(scene, sub, worldFromMesh, name, color, alpha);
+    entryFaces.push_back({firstFace, uint32_t(scene.faceCount()) - firstFace, name});
   }
+  if (csg) CsgReader(path, bytes, entryFaces, scene).read(root.at("csg"));
 
   if (root.contains("camera")) {
     if (!root.at("camera").is_object()) throw InputError(path + ": 'camera' must be an object");
