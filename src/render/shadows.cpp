@@ -604,6 +604,8 @@ ShadowResult shadowMap(const Scene& scene, const Camera& view, const Frame& fram
   result.mask.assign(size_t(frame.width) * size_t(frame.height), ShadowMask::Background);
   result.texel.assign(result.mask.size(), kNoTexel);
   const uint32_t area = uint32_t(options.mapSize) * uint32_t(options.mapSize);
+  // Per row, the lit, shadowed and facing-away pixels: each row counts its own, summed after.
+  std::vector<std::array<uint64_t, 3>> rowCounts(size_t(frame.height), {0, 0, 0});
   // One map at a time: rendered by the same z-buffer from the light, depth only, then the pixels
   // it serves tested against it, each row writing only its own pixels.
   for (size_t m = 0; m < result.lightCameras.size(); ++m) {
@@ -621,25 +623,20 @@ ShadowResult shadowMap(const Scene& scene, const Camera& view, const Frame& fram
         Receiver r;
         if (!finder.find(x, int(y), r)) continue;
         uint32_t texel = 0;
-        const bool lit = !test.shadowed(r, texel) && facesLight(r, light);
+        const bool occluded = test.shadowed(r, texel), faces = facesLight(r, light);
         result.texel[idx] = uint32_t(m) * area + texel;
-        result.mask[idx] = lit ? ShadowMask::Lit : ShadowMask::Shadowed;
+        result.mask[idx] = !occluded && faces ? ShadowMask::Lit : ShadowMask::Shadowed;
+        ++rowCounts[y][!occluded && faces ? 0 : 1];
+        rowCounts[y][2] += !faces;
       }
     });
     result.testMs += timer.lap();
   }
-
-  // Counted apart from the parallel pass (the facing rule again: cheap, and keeps the rows free
-  // of shared counters).
-  for (int y = 0; y < frame.height; ++y)
-    for (int x = 0; x < frame.width; ++x) {
-      const ShadowMask m = result.mask[frame.index(x, y)];
-      if (m == ShadowMask::Lit) ++result.lit;
-      if (m != ShadowMask::Shadowed) continue;
-      ++result.shadowed;
-      Receiver r;
-      if (finder.find(x, y, r) && !facesLight(r, light)) ++result.facingAway;
-    }
+  for (const auto& [lit, shadowed, facingAway] : rowCounts) {
+    result.lit += lit;
+    result.shadowed += shadowed;
+    result.facingAway += facingAway;
+  }
   return result;
 }
 
