@@ -1,7 +1,8 @@
 // Shadow mapping and its exact reference (include/hsr/shadows.hpp, docs/shadows.md): the light's
-// camera, the map rendered by the z-buffer from it, each visible pixel tested against the map or
-// by a shadow ray through the ray caster's BVH. Rows of the view run in parallel, each writing
-// only its own pixels, so any thread count gives the same mask.
+// cameras (one fitted to the scene, or one per cascade fitted to the receivers a depth slice of the
+// view sees), the maps rendered by the z-buffer from them, each visible pixel tested against its
+// map or by a shadow ray through the ray caster's BVH. Rows of the view run in parallel, each
+// writing only its own pixels and counts, so any thread count gives the same mask.
 #include <hsr/shadows.hpp>
 
 #include <hsr/render.hpp>
