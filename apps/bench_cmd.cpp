@@ -55,15 +55,6 @@ struct BenchRecord {
   }
 };
 
-// The stages of one shadow pass, as addShadows names them.
-hsr::Stats shadowStages(const hsr::ShadowResult& r, const hsr::ShadowOptions& options) {
-  hsr::Stats stats;
-  if (options.method == hsr::ShadowMethod::Cascaded) stats.addTime("shadow_fit", r.fitMs);
-  stats.addTime("shadow_map", r.mapMs);
-  stats.addTime("shadow_test", r.testMs);
-  return stats;
-}
-
 BenchRecord timeFrames(const BenchFlags& f, const Job& job, hsr::Frame& frame, const std::optional<ShadowPass>& shadows) {
   hsr::OcclusionBuffer occlusion;
   BenchRecord rec;
@@ -83,9 +74,11 @@ BenchRecord timeFrames(const BenchFlags& f, const Job& job, hsr::Frame& frame, c
     if (f.occlusion)  // depth kept in tiles, no image: what an occlusion culler pays per frame
       occlusion.render(job.scene, camera,
                        {job.options.depthFormat, job.options.cull, job.options.threads, job.options.tiled});
-    else if (shadows)  // the map(s) and the lookup of every visible pixel
-      stages = shadowStages(hsr::shadowMap(job.scene, camera, frame, shadows->light, shadows->options),
-                            shadows->options);
+    else if (shadows) {  // the map(s) and the lookup of every visible pixel
+      stages = {};
+      hsr::addShadowTimes(stages, hsr::shadowMap(job.scene, camera, frame, shadows->light, shadows->options),
+                          shadows->options);
+    }
     else
       renderer->render(camera, frame);  // reuses the frame's buffers
     const double ms = millisecondsSince(start);

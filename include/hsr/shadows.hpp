@@ -126,6 +126,9 @@ struct ShadowComparison {
 ShadowComparison compareShadowMasks(const Scene& scene, const Frame& frame, const ShadowResult& map,
                                     const std::vector<ShadowMask>& reference, const ShadowOptions& options);
 
+/// Adds the shadow pass's times to `stats`: "shadow_fit" (cascaded), "shadow_map", "shadow_test".
+void addShadowTimes(Stats& stats, const ShadowResult& result, const ShadowOptions& options);
+
 /// Multiplies the colour of every shadowed pixel by `ambient` (red, green and blue; alpha kept).
 void darkenShadowed(Frame& frame, const std::vector<ShadowMask>& mask, double ambient);
 

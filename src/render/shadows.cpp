@@ -710,14 +710,18 @@ void darkenShadowed(Frame& frame, const std::vector<ShadowMask>& mask, double am
   }
 }
 
+void addShadowTimes(Stats& stats, const ShadowResult& result, const ShadowOptions& options) {
+  if (options.method == ShadowMethod::Cascaded) stats.addTime("shadow_fit", result.fitMs);
+  stats.addTime("shadow_map", result.mapMs);
+  stats.addTime("shadow_test", result.testMs);
+}
+
 ShadowComparison addShadows(const Scene& scene, const Camera& view, Frame& frame, const Light& light,
                             const ShadowOptions& options, bool verify) {
   ShadowResult result = shadowMap(scene, view, frame, light, options);
   darkenShadowed(frame, result.mask, options.ambient);
   Stats& st = frame.stats;
-  if (options.method == ShadowMethod::Cascaded) st.addTime("shadow_fit", result.fitMs);
-  st.addTime("shadow_map", result.mapMs);
-  st.addTime("shadow_test", result.testMs);
+  addShadowTimes(st, result, options);
   st.addMemory("shadow_map", result.mapBytes);
   st.addMemory("shadow_mask", result.mask.size() * sizeof(ShadowMask));
   st.setDetail("shadow_light", describeLight(light));
