@@ -1,5 +1,5 @@
-// `hsr bench`: times repeated renders of one scene (or the occlusion buffer's pass), after a
-// warm-up, and prints the median and minimum with each stage's median, as text or one JSON
+// `hsr bench`: times repeated renders of one scene (or the occlusion buffer's pass, or the shadow
+// pass of one view), after a warm-up, and prints the median and minimum with each stage's median, as text or one JSON
 // record that names the scene, size, threads and build. Set up by apps/main.cpp's table.
 #include <hsr/hsr.hpp>
 #include <hsr/threads.hpp>
@@ -25,6 +25,13 @@ struct BenchFlags {
   int frames = 10, warmup = 2;
   double warmupSeconds = 1;  // and at least this long (see setupBench)
   bool json = false, occlusion = false, orbit = false;
+  ShadowFlags shadow;  // --shadows: time the shadow pass (hsr::shadowMap) of the view instead
+};
+
+// --shadows: what the shadow pass of the one view frame is given.
+struct ShadowPass {
+  hsr::Light light;
+  hsr::ShadowOptions options;
 };
 
 // What a benchmark measured: whole frames, each frame's stages (Stats::time_ms), and the first
@@ -37,6 +44,7 @@ struct BenchRecord {
   int warmupFrames = 0;
   double warmupMs = 0;
   int poses = 1;
+  std::string subject;  // what was timed: the algorithm, or the shadow pass and its maps
 
   void addStages(const hsr::Stats& stats) {
     for (const auto& [stage, ms] : stats.time_ms) {
@@ -47,7 +55,7 @@ struct BenchRecord {
   }
 };
 
-BenchRecord timeFrames(const BenchFlags& f, const Job& job, hsr::Frame& frame) {
+BenchRecord timeFrames(const BenchFlags& f, const Job& job, hsr::Frame& frame, const std::optional<ShadowPass>& shadows) {
   hsr::OcclusionBuffer occlusion;
   BenchRecord rec;
   // --orbit: every frame from another side of the scene, poses evenly around it.
@@ -56,6 +64,8 @@ BenchRecord timeFrames(const BenchFlags& f, const Job& job, hsr::Frame& frame) {
   rec.poses = int(cameras.size());
   std::optional<hsr::Renderer> renderer;  // one algorithm object for every frame: what it builds, built once
   if (!f.occlusion) renderer.emplace(job.scene, job.options);
+  if (shadows) renderer->render(job.camera, frame);  // the view, once, untimed: the shadow pass is timed
+  hsr::Stats stages;  // the last timed frame's stages
   int rendered = 0;
   // One frame, timed; the first of the process is recorded apart.
   auto renderOnce = [&](size_t pose) {
@@ -64,12 +74,18 @@ BenchRecord timeFrames(const BenchFlags& f, const Job& job, hsr::Frame& frame) {
     if (f.occlusion)  // depth kept in tiles, no image: what an occlusion culler pays per frame
       occlusion.render(job.scene, camera,
                        {job.options.depthFormat, job.options.cull, job.options.threads, job.options.tiled});
+    else if (shadows) {  // the map(s) and the lookup of every visible pixel
+      stages = {};
+      hsr::addShadowTimes(stages, hsr::shadowMap(job.scene, camera, frame, shadows->light, shadows->options),
+                          shadows->options);
+    }
     else
       renderer->render(camera, frame);  // reuses the frame's buffers
     const double ms = millisecondsSince(start);
+    if (!shadows) stages.time_ms = frame.stats.time_ms;
     if (rendered++ == 0) {
       rec.firstMs = ms;
-      if (!f.occlusion) rec.firstStages = frame.stats.time_ms;
+      if (!f.occlusion) rec.firstStages = stages.time_ms;
     }
     return ms;
   };
@@ -80,7 +96,7 @@ BenchRecord timeFrames(const BenchFlags& f, const Job& job, hsr::Frame& frame) {
   rec.warmupMs = millisecondsSince(warmupStart);
   for (int i = 0; i < f.frames; ++i) {
     rec.frameMs.push_back(renderOnce(size_t(i)));
-    if (!f.occlusion) rec.addStages(frame.stats);
+    if (!f.occlusion) rec.addStages(stages);
   }
   if (f.occlusion) occlusion.depthImage(frame);  // its statistics, with covered_pixels (not timed)
   return rec;
@@ -99,7 +115,7 @@ std::string stageText(const BenchRecord& rec) {
 void printBenchText(const BenchRecord& rec, const Job& job, const hsr::Frame& frame, int threads) {
   const double min = *std::min_element(rec.frameMs.begin(), rec.frameMs.end());
   fmt::print("{} on {}: {}x{}, {} threads{}: median {:.3f} ms, min {:.3f} ms over {} frames ({} warm-up in {:.2f} s)\n",
-             frame.stats.algorithm, job.sceneName, frame.width, frame.height, threads,
+             rec.subject, job.sceneName, frame.width, frame.height, threads,
              rec.poses > 1 ? fmt::format(", an orbit of {} poses", rec.poses) : "", median(rec.frameMs), min,
              rec.frameMs.size(), rec.warmupFrames, rec.warmupMs / 1e3);
   if (rec.stageMs.empty()) return;
@@ -127,6 +143,7 @@ Json benchJson(const BenchRecord& rec, const Job& job, const hsr::Frame& frame, 
   out["min_ms"] = *std::min_element(rec.frameMs.begin(), rec.frameMs.end());
   out["frame_ms"] = rec.frameMs;
   out["first_frame_ms"] = rec.firstMs;
+  out["timed"] = rec.subject;
   Json firstStages = Json::object(), stages = Json::object();
   for (const auto& [stage, ms] : rec.firstStages) firstStages[stage] = ms;
   for (const auto& [stage, ms] : rec.stageMs)
@@ -154,12 +171,28 @@ Json benchJson(const BenchRecord& rec, const Job& job, const hsr::Frame& frame, 
 }
 
 int runBench(const BenchFlags& f) {
+  if (f.shadow.shadows) {  // before the scene loads
+    if (f.occlusion || f.orbit)
+      throw hsr::InputError("--shadows times the shadow pass of one view: drop --occlusion and --orbit");
+    if (!has(f.view.frameOutputs(), hsr::FrameOutputs::TriangleIds))
+      throw hsr::InputError("--shadows finds each pixel's point on its triangle: --outputs " + f.view.outputs +
+                            " has no triangle ids (add triangle)");
+    f.shadow.flagLight();
+    f.shadow.checkedShadowOptions(hsr::RenderOptions{});
+  }
   Job job = f.view.prepare();
   if (f.occlusion && (job.options.algorithm != "zbuffer" || !job.options.params.empty()))
     throw hsr::InputError("--occlusion: times the occlusion buffer (the tiled z-buffer, depth only); drop "
                           "--algorithm and --param");
+  std::optional<ShadowPass> shadows;
+  if (f.shadow.shadows) shadows = ShadowPass{f.shadow.shadowLight(job), f.shadow.checkedShadowOptions(job.options)};
   hsr::Frame frame;
-  const BenchRecord rec = timeFrames(f, job, frame);
+  BenchRecord rec = timeFrames(f, job, frame, shadows);
+  rec.subject = frame.stats.algorithm;
+  if (shadows)
+    rec.subject = fmt::format("shadow pass ({}, {} map(s) of {}x{}, {})", hsr::shadowMethodName(shadows->options.method),
+                              shadows->options.method == hsr::ShadowMethod::Single ? 1 : shadows->options.cascades,
+                              shadows->options.mapSize, shadows->options.mapSize, hsr::describeLight(shadows->light));
   const int threads = hsr::resolveThreads(job.options.threads);
   if (f.json)
     fmt::print("{}\n", benchJson(rec, job, frame, threads).dump(2));
@@ -188,16 +221,20 @@ Runner setupBench(CLI::App& cmd) {
                "Render each timed frame from another pose: --frames poses evenly around the scene (the camera "
                "turned about its up axis through the scene's centre), so what an algorithm builds once per scene "
                "(a BSP tree) is timed apart from what it does per view");
+  f->shadow.declareShadows(cmd,
+                           "Time the shadow pass instead (docs/shadows.md): the view rendered once, then per timed "
+                           "frame the shadow map(s) rendered from the light and every visible pixel tested");
   cmd.add_flag("--json", f->json,
-               "Print one JSON object: median_ms, min_ms, frames, frame_ms, stage_median_ms, first_frame_ms, "
+               "Print one JSON object: timed, median_ms, min_ms, frames, frame_ms, stage_median_ms, first_frame_ms, "
                "first_frame_stages_ms, poses, threads, scene, size, build and the last frame's statistics");
   cmd.footer(
       "Times are wall-clock milliseconds of whole render() calls (with --occlusion, of OcclusionBuffer::render "
-      "calls).\n\n"
+      "calls; with --shadows, of shadowMap() calls).\n\n"
       "Examples:\n"
       "  hsr bench builtin:cubes --frames 20\n"
       "  hsr bench builtin:sphere --size 1920x1080 --outputs depth,face,color\n"
       "  hsr bench builtin:city --size 1920x1080 --algorithm bsp --orbit --frames 20\n"
+      "  hsr bench builtin:city --size 1920x1080 --shadows --light-dir 0.6,-1,0.4 --frames 5\n"
       "  hsr bench model.obj --camera cam.json --size 1920x1080 --algorithm zbuffer --threads 1 --json");
   return [f] { return runBench(*f); };
 }

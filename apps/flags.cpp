@@ -296,4 +296,75 @@ Job ViewFlags::prepare() const {
   return job;
 }
 
+void ShadowFlags::declareShadows(CLI::App& cmd, const std::string& shadowsHelp) {
+  const char* group = "Shadows (docs/shadows.md)";
+  CLI::Option* shadowsFlag = cmd.add_flag("--shadows", shadows, shadowsHelp)->group(group);
+  CLI::Option* lightDirFlag =
+      cmd.add_option("--light-dir", lightDir,
+                     "A directional light: the direction its light travels (overrides the scene's light; default: "
+                     "the scene's, else a sun over the viewer's left shoulder)")
+          ->type_name("X,Y,Z")
+          ->needs(shadowsFlag)
+          ->group(group);
+  cmd.add_option("--light-pos", lightPos, "A point light at this position, outside the scene's bounds")
+      ->type_name("X,Y,Z")
+      ->needs(shadowsFlag)
+      ->excludes(lightDirFlag)
+      ->group(group);
+  cmd.add_option("--shadow-method", shadowMethod,
+                 "single: one map fitted to the whole scene; cascaded: the view's visible depth range split into "
+                 "--shadow-cascades slices, one map fitted to each slice's receivers")
+      ->type_name("single|cascaded")
+      ->needs(shadowsFlag)
+      ->capture_default_str()
+      ->group(group);
+  cascadesFlag = cmd.add_option("--shadow-cascades", shadowOptions.cascades,
+                                fmt::format("Cascaded: the slices, one map each, 1 to {}", hsr::kMaxShadowCascades))
+                     ->type_name("K")
+                     ->needs(shadowsFlag)
+                     ->check(CLI::Range(1, hsr::kMaxShadowCascades))
+                     ->capture_default_str()
+                     ->group(group);
+  cmd.add_option("--shadow-map-size", shadowOptions.mapSize,
+                 fmt::format("Each shadow map's side in texels, {} to {}", hsr::kMinShadowMapSize, hsr::kMaxShadowMapSize))
+      ->type_name("N")
+      ->needs(shadowsFlag)
+      ->capture_default_str()
+      ->group(group);
+  cmd.add_option("--shadow-bias", shadowOptions.bias,
+                 "Depth bias in texel widths at the receiver (besides the depth format's rounding): an occluder "
+                 "nearer the light than the receiver's plane by less than this casts no shadow")
+      ->type_name("TEXELS")
+      ->needs(shadowsFlag)
+      ->capture_default_str()
+      ->group(group);
+}
+
+std::optional<hsr::Light> ShadowFlags::flagLight() const {
+  if (lightDir.empty() && lightPos.empty()) return std::nullopt;
+  hsr::Light light;
+  light.kind = lightDir.empty() ? hsr::Light::Kind::Point : hsr::Light::Kind::Directional;
+  const char* flag = lightDir.empty() ? "--light-pos" : "--light-dir";
+  const std::string& text = lightDir.empty() ? lightPos : lightDir;
+  light.vector = parseVec3(flag, text);
+  hsr::checkLight(light, fmt::format("{} '{}'", flag, text));
+  return light;
+}
+
+hsr::ShadowOptions ShadowFlags::checkedShadowOptions(const hsr::RenderOptions& view) const {
+  hsr::ShadowOptions options = shadowOptions;
+  options.method = hsr::parseShadowMethod(shadowMethod, "--shadow-method");
+  if (options.method != hsr::ShadowMethod::Cascaded && cascadesFlag && cascadesFlag->count())
+    throw InputError("--shadow-cascades: applies to --shadow-method cascaded only");
+  options.depthFormat = view.depthFormat;
+  options.threads = view.threads;
+  hsr::checkShadowOptions(options);
+  return options;
+}
+
+hsr::Light ShadowFlags::shadowLight(const Job& job) const {
+  if (const std::optional<hsr::Light> light = flagLight()) return *light;
+  return job.scene.light ? *job.scene.light : hsr::defaultLight(job.camera);
+}
+
 }  // namespace hsr::cli

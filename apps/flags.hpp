@@ -74,4 +74,22 @@ struct ViewFlags {
   void placeCamera(Job& job, const CameraFlags& camera, const hsr::Bounds3& bounds) const;
 };
 
+/// The shadow flags `hsr render` and `hsr bench` share (docs/shadows.md), bound by declareShadows().
+struct ShadowFlags {
+  bool shadows = false;
+  std::string lightDir, lightPos;
+  std::string shadowMethod = hsr::shadowMethodName(hsr::ShadowOptions{}.method);
+  hsr::ShadowOptions shadowOptions;
+  CLI::Option* cascadesFlag = nullptr;
+
+  /// Declares --shadows (`shadowsHelp`: what it does in this subcommand) and the flags it enables.
+  void declareShadows(CLI::App& cmd, const std::string& shadowsHelp);
+  /// The light --light-dir or --light-pos give (checked), if any.
+  std::optional<hsr::Light> flagLight() const;
+  /// The options the flags give, with the view's depth format and threads, checked (InputError).
+  hsr::ShadowOptions checkedShadowOptions(const hsr::RenderOptions& view) const;
+  /// The light: the flags', else the scene's, else the default for the job's camera.
+  hsr::Light shadowLight(const Job& job) const;
+};
+
 }  // namespace hsr::cli

@@ -18,21 +18,11 @@
 namespace hsr::cli {
 namespace {
 
-// The light --light-dir or --light-pos give (checked before the scene loads), if any.
-std::optional<hsr::Light> flagLight(const RenderFlags& f) {
-  if (f.lightDir.empty() && f.lightPos.empty()) return std::nullopt;
-  hsr::Light light;
-  light.kind = f.lightDir.empty() ? hsr::Light::Kind::Point : hsr::Light::Kind::Directional;
-  const char* flag = f.lightDir.empty() ? "--light-pos" : "--light-dir";
-  light.vector = parseVec3(flag, f.lightDir.empty() ? f.lightPos : f.lightDir);
-  hsr::checkLight(light, fmt::format("{} '{}'", flag, f.lightDir.empty() ? f.lightPos : f.lightDir));
-  return light;
-}
-
 void printShadowSummary(const hsr::Stats& s) {
   auto count = [&s](std::string_view key) { return s.detailCount(key).value_or(0); };
-  fmt::print("  shadows: {}, map {}x{}, lit {} pixels, shadowed {} (of which facing away {})\n",
-             s.detailText("shadow_light"), count("shadow_map_size"), count("shadow_map_size"),
+  fmt::print("  shadows: {}, {}, {} map(s) of {}x{}, lit {} pixels, shadowed {} (of which facing away {})\n",
+             s.detailText("shadow_light"), s.detailText("shadow_method"), count("shadow_maps"),
+             count("shadow_map_size"), count("shadow_map_size"),
              count("shadow_lit_pixels"), count("shadow_shadowed_pixels"), count("shadow_facing_away_pixels"));
   if (s.detailCount("shadow_wrong_pixels"))
     fmt::print("  shadow verify: {} wrong pixels against shadow rays, {} away from shadow edges, {} away from "
@@ -137,8 +127,8 @@ void checkRenderFlags(const RenderFlags& f, bool writes) {
   if (f.shadows && !has(kept, hsr::FrameOutputs::TriangleIds))
     throw InputError("--shadows finds each pixel's point on its triangle: the outputs kept (" +
                      hsr::frameOutputsName(kept) + ") have no triangle ids (add triangle)");
-  flagLight(f);  // its errors before the scene loads; finishRender uses the light
-  if (f.shadows) hsr::checkShadowOptions(f.shadowOptions);
+  f.flagLight();  // its errors before the scene loads; finishRender uses the light
+  if (f.shadows) f.checkedShadowOptions(hsr::RenderOptions{});
   if (writes && !f.svg.empty()) hsr::checkSvgPath(f.svg);
 }
 
@@ -162,16 +152,8 @@ Job prepareRender(const RenderFlags& f) {
 
 int finishRender(const RenderFlags& f, const Job& job, hsr::Frame& frame,
                  std::chrono::steady_clock::time_point start) {
-  if (f.shadows) {
-    hsr::ShadowOptions shadowOptions = f.shadowOptions;
-    shadowOptions.depthFormat = job.options.depthFormat;
-    shadowOptions.threads = job.options.threads;
-    const std::optional<hsr::Light> lightFromFlags = flagLight(f);
-    const hsr::Light light = lightFromFlags ? *lightFromFlags
-                             : job.scene.light ? *job.scene.light
-                                               : hsr::defaultLight(job.camera);
-    hsr::addShadows(job.scene, job.camera, frame, light, shadowOptions, f.verify);
-  }
+  if (f.shadows)
+    hsr::addShadows(job.scene, job.camera, frame, f.shadowLight(job), f.checkedShadowOptions(job.options), f.verify);
   double wallMs = millisecondsSince(start);
 
   // All outputs or none: each is written to a temporary file, and all are renamed at the end.
@@ -251,38 +233,10 @@ void declareRenderFlags(CLI::App& cmd, RenderFlags* f) {
   for (auto [flag, path] : outputFlags)
     f->outputFlags.push_back({flag, cmd.get_option(flag), path, std::string_view(flag) == "--stats"});
   cmd.add_flag("--verify", f->verify, "Also render the exact reference and count wrong/ambiguous pixels");
-  const char* shadows = "Shadows (docs/shadows.md)";
-  CLI::Option* shadowsFlag =
-      cmd.add_flag("--shadows", f->shadows,
-                   "Shadow-map the image: a depth map rendered by the z-buffer from the light, each visible pixel "
-                   "tested against it, shadowed pixels darkened in the colour output (with --verify, also checked "
-                   "against shadow rays)")
-          ->group(shadows);
-  CLI::Option* lightDirFlag =
-      cmd.add_option("--light-dir", f->lightDir,
-                     "A directional light: the direction its light travels (overrides the scene's light; default: "
-                     "the scene's, else a sun over the viewer's left shoulder)")
-          ->type_name("X,Y,Z")
-          ->needs(shadowsFlag)
-          ->group(shadows);
-  cmd.add_option("--light-pos", f->lightPos, "A point light at this position, outside the scene's bounds")
-      ->type_name("X,Y,Z")
-      ->needs(shadowsFlag)
-      ->excludes(lightDirFlag)
-      ->group(shadows);
-  cmd.add_option("--shadow-map-size", f->shadowOptions.mapSize,
-                 fmt::format("Shadow map side in texels, {} to {}", hsr::kMinShadowMapSize, hsr::kMaxShadowMapSize))
-      ->type_name("N")
-      ->needs(shadowsFlag)
-      ->capture_default_str()
-      ->group(shadows);
-  cmd.add_option("--shadow-bias", f->shadowOptions.bias,
-                 "Depth bias in texel widths at the receiver (besides the depth format's rounding): an occluder "
-                 "nearer the light than the receiver's plane by less than this casts no shadow")
-      ->type_name("TEXELS")
-      ->needs(shadowsFlag)
-      ->capture_default_str()
-      ->group(shadows);
+  f->declareShadows(cmd,
+                    "Shadow-map the image: depth maps rendered by the z-buffer from the light, each visible pixel "
+                    "tested against one, shadowed pixels darkened in the colour output (with --verify, also checked "
+                    "against shadow rays)");
   cmd.add_flag("--json", f->json, "Print the statistics JSON to stdout instead of the summary");
   cmd.add_flag("-q,--quiet", f->quiet, "Print nothing on success");
 

@@ -15,16 +15,14 @@
 
 namespace hsr::cli {
 
-struct RenderFlags {
+// The shadow flags (ShadowFlags, flags.hpp): --shadows, the light from the flags (else the
+// scene's, else the default) and the shadow options.
+struct RenderFlags : ShadowFlags {
   ViewFlags view;
   std::string out, ids, depth, depthImage, overdrawImage, stats, svg;
   std::string instanceIds, barycentric;  // attributes resolved from the ids (hsr/views.hpp)
   bool verify = false, quiet = false, json = false;
   std::vector<hsr::cli::OutputFlag> outputFlags;  // every output flag, checked as a set
-  // --shadows (docs/shadows.md): the light from the flags, else the scene's, else the default.
-  bool shadows = false;
-  std::string lightDir, lightPos;
-  hsr::ShadowOptions shadowOptions;
 };
 
 /// Declares the flags of `hsr render` on `cmd`, bound to `f` (which must outlive parsing).

@@ -39,7 +39,7 @@ TEST_F(ShadowsCommandLine, ShadowsDarkenTheImageAndAreCounted) {
   ASSERT_EQ(hsr(common + "-o plain.png --quiet").status, 0);
   Result r = hsr(common + "--shadows --light-dir 0.6,-1,0.4 --shadow-map-size 1024 -o shadowed.png --stats s.json --verify");
   ASSERT_EQ(r.status, 0) << r;
-  EXPECT_NE(r.out.find("shadows: directional 0.6,-1,0.4, map 1024x1024"), std::string::npos) << r;
+  EXPECT_NE(r.out.find("shadows: directional 0.6,-1,0.4, cascaded, 4 map(s) of 1024x1024"), std::string::npos) << r;
   EXPECT_NE(r.out.find("shadow verify: "), std::string::npos) << r;
   EXPECT_LT(redSum("shadowed.png"), redSum("plain.png"));
 
@@ -49,11 +49,47 @@ TEST_F(ShadowsCommandLine, ShadowsDarkenTheImageAndAreCounted) {
   EXPECT_EQ(d.at("shadow_lit_pixels").get<uint64_t>() + d.at("shadow_shadowed_pixels").get<uint64_t>(),
             s.at("covered_pixels").get<uint64_t>());
   EXPECT_EQ(d.at("shadow_map_size"), 1024);
+  EXPECT_EQ(d.at("shadow_method"), "cascaded");
+  EXPECT_EQ(d.at("shadow_maps"), 4);
+  EXPECT_TRUE(s.at("time_ms").contains("shadow_fit"));
   EXPECT_GT(s.at("memory").at("shadow_map").get<uint64_t>(), 1024u * 1024u * 4u - 1);
   EXPECT_TRUE(s.at("time_ms").contains("shadow_map"));
   EXPECT_TRUE(s.at("time_ms").contains("shadow_test"));
   EXPECT_TRUE(d.contains("shadow_wrong_away_from_edges"));
   EXPECT_LE(d.at("shadow_wrong_away_from_edges").get<uint64_t>(), d.at("shadow_wrong_pixels").get<uint64_t>());
+}
+
+TEST_F(ShadowsCommandLine, TheMethodAndCascadesAreFlags) {
+  const std::string common = "render builtin:city?blocks=4 --size 160x90 --threads 2 --shadows --json ";
+  Result r = hsr(common + "--shadow-method single --shadow-map-size 512");
+  ASSERT_EQ(r.status, 0) << r;
+  nlohmann::json s = nlohmann::json::parse(r.out);
+  EXPECT_EQ(s.at("zbuffer").at("shadow_method"), "single");
+  EXPECT_EQ(s.at("zbuffer").at("shadow_maps"), 1);
+  EXPECT_FALSE(s.at("time_ms").contains("shadow_fit"));
+  r = hsr(common + "--shadow-method cascaded --shadow-cascades 2 --shadow-map-size 512");
+  ASSERT_EQ(r.status, 0) << r;
+  s = nlohmann::json::parse(r.out);
+  EXPECT_EQ(s.at("zbuffer").at("shadow_method"), "cascaded");
+  EXPECT_EQ(s.at("zbuffer").at("shadow_maps"), 2);
+}
+
+TEST_F(ShadowsCommandLine, BenchTimesTheShadowPass) {
+  Result r = hsr("bench builtin:city?blocks=4 --size 160x90 --threads 2 --frames 2 --warmup 0 --warmup-time 0 "
+                 "--shadows --light-dir 0.6,-1,0.4 --shadow-map-size 512");
+  ASSERT_EQ(r.status, 0) << r;
+  EXPECT_NE(r.out.find("shadow pass (cascaded, 4 map(s) of 512x512, directional 0.6,-1,0.4) on builtin:city"),
+            std::string::npos) << r;
+  EXPECT_NE(r.out.find("shadow_fit"), std::string::npos) << r;
+  EXPECT_NE(r.out.find("shadow_map"), std::string::npos) << r;
+  EXPECT_NE(r.out.find("shadow_test"), std::string::npos) << r;
+  r = hsr("bench builtin:cubes --size 64x64 --frames 1 --warmup 0 --warmup-time 0 --shadows --shadow-method single "
+          "--shadow-map-size 256 --json");
+  ASSERT_EQ(r.status, 0) << r;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("timed").get<std::string>().rfind("shadow pass (single, 1 map(s) of 256x256", 0), 0u) << r;
+  EXPECT_TRUE(j.at("stage_median_ms").contains("shadow_map")) << r;
+  EXPECT_TRUE(j.at("stage_median_ms").contains("shadow_test")) << r;
 }
 
 TEST_F(ShadowsCommandLine, TheSceneLightIsUsedAndFlagsOverrideIt) {
@@ -80,6 +116,17 @@ TEST_F(ShadowsCommandLine, BadShadowInputIsExitTwoWithOneLine) {
                         Case{base + "--shadows --shadow-map-size 100000", "--shadow-map-size"},
                         Case{base + "--shadows --shadow-bias -1", "--shadow-bias"},
                         Case{base + "--shadows --shadow-bias nan", "--shadow-bias"},
+                        Case{base + "--shadows --shadow-method fancy", "--shadow-method 'fancy': expected single or cascaded"},
+                        Case{base + "--shadows --shadow-method ''", "--shadow-method"},
+                        Case{base + "--shadows --shadow-cascades 0", "--shadow-cascades"},
+                        Case{base + "--shadows --shadow-cascades 17", "--shadow-cascades"},
+                        Case{base + "--shadows --shadow-cascades two", "--shadow-cascades"},
+                        Case{base + "--shadows --shadow-method single --shadow-cascades 2", "--shadow-cascades"},
+                        Case{base + "--shadows --shadow-cascades 16 --shadow-map-size 16384", "2^32"},
+                        Case{base + "--shadow-cascades 2", "--shadows"},
+                        Case{"bench builtin:cubes --size 32x32 --shadows --orbit", "--orbit"},
+                        Case{"bench builtin:cubes --size 32x32 --shadows --shadow-cascades 0", "--shadow-cascades"},
+                        Case{"bench builtin:cubes --size 32x32 --shadows --outputs depth,face", "triangle"},
                         Case{base + "--light-dir 0,-1,0", "--shadows"},
                         Case{base + "--shadows --light-dir 0,-1,0 --light-pos 0,9,0", "excludes"},
                         Case{"render builtin:cubes --size 32x32 --shadows --outputs depth,face", "triangle"},

@@ -1,7 +1,7 @@
-// Shadows, the z-buffer's other use (docs/shadows.md): a shadow map rendered with the z-buffer
-// from the light, each visible pixel of a view frame tested against it, and the exact reference
-// (a shadow ray per visible pixel through the ray caster's BVH) that the map is verified against.
-// Consumed by `hsr render --shadows` and the tests.
+// Shadows, the z-buffer's other use (docs/shadows.md): shadow maps rendered with the z-buffer
+// from the light, each visible pixel of a view frame tested against one, and the exact reference
+// (a shadow ray per visible pixel through the ray caster's BVH) that the maps are verified against.
+// Consumed by `hsr render --shadows`, `hsr bench --shadows` and the tests.
 //
 // Conventions:
 //  - a visible pixel's point is where the view ray through its centre meets the plane of the
@@ -10,9 +10,12 @@
 //    normal turned toward the viewer has a positive dot product with the direction to the light)
 //    and nothing lies between it and the light; otherwise it is shadowed (both methods apply the
 //    same facing rule, so they differ only in what lies between);
-//  - the map is square, mapSize x mapSize texels, fitted to the scene's bounds as seen from the
-//    light; the depth bias is in texels: a receiver is shadowed when the map's depth at its
-//    texel centre is nearer than the receiver's own plane there by more than bias texel widths.
+//  - a map is square, mapSize x mapSize texels. The `single` method fits one map to the scene's
+//    bounds as seen from the light; the `cascaded` method splits the view's visible depth range
+//    into K slices and fits one map to each slice's receivers (the points its pixels show) and
+//    to what lies between them and the light;
+//  - the depth bias is in texels: a receiver is shadowed when the map's depth at its texel centre
+//    is nearer than the receiver's own plane there by more than bias texel widths.
 #pragma once
 #include <hsr/camera.hpp>
 #include <hsr/frame.hpp>
@@ -47,34 +50,55 @@ std::string describeLight(const Light& light);
 /// close that the bounds do not fit in a 160-degree view.
 Camera lightCamera(const Bounds3& sceneBounds, const Light& light, int mapSize);
 
+inline constexpr int kMaxShadowCascades = 16;
+
+/// How the light's maps are fitted (docs/shadows.md "Method").
+enum class ShadowMethod : uint8_t {
+  Single,    // one map fitted to the whole scene's bounds
+  Cascaded,  // the view's visible depth range split into `cascades` slices (the practical split
+             // scheme), one map per slice fitted to the receivers the slice's pixels show
+};
+/// "single" or "cascaded".
+const char* shadowMethodName(ShadowMethod method);
+/// The method named `name`; throws InputError "`what` 'name': expected single or cascaded".
+ShadowMethod parseShadowMethod(const std::string& name, const std::string& what);
+
 struct ShadowOptions {
-  int mapSize = 2048;        // texels per side, kMinShadowMapSize..kMaxShadowMapSize
+  ShadowMethod method = ShadowMethod::Cascaded;
+  int cascades = 4;          // Cascaded: the slices (maps), 1..kMaxShadowCascades; 1 = one map
+                             // fitted to all the visible receivers
+  int mapSize = 2048;        // texels per side of each map, kMinShadowMapSize..kMaxShadowMapSize
   double bias = 1.0;         // depth bias in texel widths at the receiver, >= 0 (finite)
   double ambient = 0.35;     // a shadowed pixel's colour is multiplied by this, in [0, 1]
   DepthFormat depthFormat;   // of the map's z-buffer (default f32:reversed)
   int threads = 0;           // 0: all cores
 };
-/// Throws InputError keyed Setting::ShadowMapSize or ShadowBias for a value out of range.
+/// Throws InputError keyed Setting::ShadowMapSize or ShadowBias for a value out of range, and a
+/// plain InputError for a cascade count out of range.
 void checkShadowOptions(const ShadowOptions& options);
 
 /// Per view pixel (row 0 at the top).
 enum class ShadowMask : uint8_t { Background = 0, Lit = 1, Shadowed = 2 };
-/// ShadowResult::texel of a background pixel.
+/// ShadowResult::texel of a background pixel (and of every pixel when no map was needed).
 inline constexpr uint32_t kNoTexel = 0xffffffffu;
 
 struct ShadowResult {
-  std::vector<ShadowMask> mask;  // frame.width * frame.height
-  std::vector<uint32_t> texel;   // per pixel, the map texel y * mapSize + x it was tested at
+  std::vector<ShadowMask> mask;       // frame.width * frame.height
+  std::vector<uint32_t> texel;        // per pixel, the texel it was tested at:
+                                      // map * mapSize^2 + y * mapSize + x
   uint64_t lit = 0, shadowed = 0;
-  uint64_t facingAway = 0;       // of the shadowed: the viewer sees the side away from the light
-  Camera lightCamera;            // the map's camera
-  double mapMs = 0, testMs = 0;  // rendering the map; testing the pixels against it
-  uint64_t mapBytes = 0;         // the map's z-buffer and depth frame (its Stats::memory_bytes)
+  uint64_t facingAway = 0;            // of the shadowed: the viewer sees the side away from the light
+  std::vector<Camera> lightCameras;   // the maps' cameras (cascaded: one per slice that has receivers)
+  std::vector<double> splits;         // cascaded: the slices' eye depths, near to far (maps + 1 of them)
+  double fitMs = 0;                   // cascaded: finding each slice's receivers and their bounds
+  double mapMs = 0, testMs = 0;       // rendering the maps; testing the pixels against them
+  uint64_t mapBytes = 0;              // the largest map's z-buffer and depth frame (its Stats::memory_bytes):
+                                      // the maps are rendered and used one after another
 };
 
-/// Renders the shadow map of `scene` with the `zbuffer` algorithm (depth only) from the light
-/// and tests each visible pixel of `frame` (rendered from `view`, with triangle ids) against it.
-/// Throws InputError for bad options, a bad light, or a frame without triangle ids.
+/// Renders the shadow map(s) of `scene` with the `zbuffer` algorithm (depth only) from the light
+/// and tests each visible pixel of `frame` (rendered from `view`, with triangle ids) against its
+/// map. Throws InputError for bad options, a bad light, or a frame without triangle ids.
 ShadowResult shadowMap(const Scene& scene, const Camera& view, const Frame& frame, const Light& light,
                        const ShadowOptions& options);
 
@@ -88,9 +112,9 @@ std::vector<ShadowMask> shadowRays(const Scene& scene, const Camera& view, const
 /// reference mask is not the same over its 3x3 neighbourhood (clipped to the image), and near a
 /// face edge when the frame's face ids are not (silhouettes and creases of the view): edges at
 /// the scale of the view's pixels. A wrong pixel away from both is still explained by the map's
-/// resolution when its texel is at an edge as the light sees it: over the 3x3 texels around it,
-/// the receivers (visible pixels) that fall there include both lit and shadowed ones (in the
-/// reference), or the light sees more than one face (the map rendered again with face ids).
+/// resolution when its texel is at an edge as the light sees it: over the 3x3 texels around it (in
+/// its own map), the receivers (visible pixels) that fall there include both lit and shadowed ones
+/// (in the reference), or the light sees more than one face (the map rendered again with face ids).
 struct ShadowComparison {
   uint64_t wrong = 0;                 // pixels whose mask differs from the reference's
   uint64_t wrongAwayFromShadowEdges = 0;
@@ -102,12 +126,15 @@ struct ShadowComparison {
 ShadowComparison compareShadowMasks(const Scene& scene, const Frame& frame, const ShadowResult& map,
                                     const std::vector<ShadowMask>& reference, const ShadowOptions& options);
 
+/// Adds the shadow pass's times to `stats`: "shadow_fit" (cascaded), "shadow_map", "shadow_test".
+void addShadowTimes(Stats& stats, const ShadowResult& result, const ShadowOptions& options);
+
 /// Multiplies the colour of every shadowed pixel by `ambient` (red, green and blue; alpha kept).
 void darkenShadowed(Frame& frame, const std::vector<ShadowMask>& mask, double ambient);
 
 /// What `hsr render --shadows` does after rendering `frame`: shadowMap(), darkenShadowed() when
-/// the frame has colour, and the statistics (times "shadow_map", "shadow_test", memory
-/// "shadow_map" and "shadow_mask", details shadow_*); with `verify`, also shadowRays() and
+/// the frame has colour, and the statistics (times "shadow_fit" (cascaded), "shadow_map",
+/// "shadow_test", memory "shadow_map" and "shadow_mask", details shadow_*); with `verify`, also shadowRays() and
 /// compareShadowMasks(), recorded as the details shadow_wrong_* and time "shadow_verify". Returns the comparison (empty
 /// without `verify`).
 ShadowComparison addShadows(const Scene& scene, const Camera& view, Frame& frame, const Light& light,

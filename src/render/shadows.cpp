@@ -1,7 +1,8 @@
 // Shadow mapping and its exact reference (include/hsr/shadows.hpp, docs/shadows.md): the light's
-// camera, the map rendered by the z-buffer from it, each visible pixel tested against the map or
-// by a shadow ray through the ray caster's BVH. Rows of the view run in parallel, each writing
-// only its own pixels, so any thread count gives the same mask.
+// cameras (one fitted to the scene, or one per cascade fitted to the receivers a depth slice of the
+// view sees), the maps rendered by the z-buffer from them, each visible pixel tested against its
+// map or by a shadow ray through the ray caster's BVH. Rows of the view run in parallel, each
+// writing only its own pixels and counts, so any thread count gives the same mask.
 #include <hsr/shadows.hpp>
 
 #include <hsr/render.hpp>
@@ -76,25 +77,40 @@ void widen(double& lo, double& hi, double least) {
   hi = mid + 0.5 * least;
 }
 
-// Orthographic along the direction the light travels, the bounds' projection filling the map but
-// a texel at each side.
-Camera directionalCamera(const Bounds3& bounds, const dvec3& direction, int n) {
+// Where maps are framed: the light's axes and, for a point light, its position. A map's box is
+// given in the light's coordinates of a point: (x, y, z) along the axes for a directional light;
+// the tangents x/z, y/z and the depth z from the position for a point light (all positive there:
+// the scene's bounds lie in front of it).
+struct LightSpace {
   dvec3 rows[3];
-  lightAxes(direction, rows);
-  const double diag = glm::length(bounds.hi - bounds.lo);
-  dvec3 lo(kInf), hi(-kInf);
-  for (const dvec3& c : corners(bounds))
-    for (int r = 0; r < 3; ++r) {
-      lo[r] = std::min(lo[r], glm::dot(rows[r], c));
-      hi[r] = std::max(hi[r], glm::dot(rows[r], c));
-    }
+  dvec3 origin{0.0};
+  bool perspective = false;
+  double sceneDiagonal = 0;
+
+  dvec3 coords(const dvec3& p) const {
+    const dvec3 q{glm::dot(rows[0], p - origin), glm::dot(rows[1], p - origin), glm::dot(rows[2], p - origin)};
+    return perspective ? dvec3(q.x / q.z, q.y / q.z, q.z) : q;
+  }
+  // The box of `b`'s corners (their coordinates bound those of every point inside).
+  Bounds3 box(const Bounds3& b) const {
+    Bounds3 out;
+    for (const dvec3& c : corners(b)) out.add(coords(c));
+    return out;
+  }
+};
+
+// Orthographic along the direction the light travels, `box` filling the map but a texel at each
+// side.
+Camera directionalCamera(const LightSpace& space, const Bounds3& box, int n) {
+  const double diag = space.sceneDiagonal;
+  dvec3 lo = box.lo, hi = box.hi;
   for (int r = 0; r < 3; ++r) widen(lo[r], hi[r], 1e-9 * diag);
   const double margin = 0.01 * (hi.z - lo.z) + 1e-6 * diag;  // depth room in front and behind
 
   Camera cam;
   cam.width = cam.height = n;
   cam.orthographic = true;
-  cam.cameraFromWorld = cameraFromWorld(rows, dvec3(0.0));
+  cam.cameraFromWorld = cameraFromWorld(space.rows, dvec3(0.0));
   cam.cameraFromWorld[3][2] = margin - lo.z;  // z = forward . p - lo.z + margin
   const double kx = (n - 2) / (hi.x - lo.x), ky = (n - 2) / (hi.y - lo.y);
   dmat4 pix(0.0);  // pix[col][row]
@@ -135,9 +151,9 @@ Frustum frustumAlong(const Bounds3& bounds, const dvec3& position, const dvec3& 
   return fr;
 }
 
-// Perspective from a point light, looking toward the bounds (at their centre, or along the mean
-// direction of their corners when that frames them more tightly).
-Camera pointCamera(const Bounds3& bounds, const dvec3& position, int n) {
+// A point light's axes, looking toward the bounds (at their centre, or along the mean direction
+// of their corners when that frames them more tightly).
+void pointAxes(const Bounds3& bounds, const dvec3& position, dvec3 rows[3]) {
   if (glm::all(glm::greaterThanEqual(position, bounds.lo)) && glm::all(glm::lessThanEqual(position, bounds.hi)))
     throw InputError("light position " + formatVec(position) +
                      " lies inside the scene's bounds: one perspective shadow map cannot see the whole scene "
@@ -151,25 +167,36 @@ Camera pointCamera(const Bounds3& bounds, const dvec3& position, int n) {
     throw InputError("light position " + formatVec(position) +
                      " is so close to the scene that its bounds do not fit in a 160-degree view (move the light "
                      "farther away, or use a directional light)");
-  widen(fr.lo.x, fr.hi.x, 1e-9);
-  widen(fr.lo.y, fr.hi.y, 1e-9);
+  for (int r = 0; r < 3; ++r) rows[r] = fr.rows[r];
+}
+
+// Perspective from a point light, `box` (tangents and depths) filling the map but a texel at each
+// side.
+Camera pointCamera(const LightSpace& space, const Bounds3& box, int n) {
+  dvec3 lo = box.lo, hi = box.hi;
+  widen(lo.x, hi.x, 1e-9);
+  widen(lo.y, hi.y, 1e-9);
 
   Camera cam;
   cam.width = cam.height = n;
   cam.orthographic = false;
-  cam.cameraFromWorld = cameraFromWorld(fr.rows, position);
-  const double kx = (n - 2) / (fr.hi.x - fr.lo.x), ky = (n - 2) / (fr.hi.y - fr.lo.y);
+  cam.cameraFromWorld = cameraFromWorld(space.rows, space.origin);
+  const double kx = (n - 2) / (hi.x - lo.x), ky = (n - 2) / (hi.y - lo.y);
   dmat4 pix(0.0);  // hx = kx x + (1 - kx lo.x) z, w = z
   pix[0][0] = kx;
-  pix[2][0] = 1 - kx * fr.lo.x;
+  pix[2][0] = 1 - kx * lo.x;
   pix[1][1] = ky;
-  pix[2][1] = 1 - ky * fr.lo.y;
+  pix[2][1] = 1 - ky * lo.y;
   pix[2][2] = 1;
   pix[2][3] = 1;
   cam.pixelFromCamera = pix;
-  cam.near = 0.99 * fr.lo.z;
-  cam.far = 1.01 * fr.hi.z;
+  cam.near = 0.99 * lo.z;
+  cam.far = 1.01 * hi.z;
   return cam;
+}
+
+Camera mapCamera(const LightSpace& space, const Bounds3& box, int n) {
+  return space.perspective ? pointCamera(space, box, n) : directionalCamera(space, box, n);
 }
 
 // --- Visible points ----------------------------------------------------------------------------
@@ -309,15 +336,16 @@ bool uniform3x3(int x, int y, int w, int h, auto&& value) {
   return true;
 }
 
-// Per texel of the map that some receiver falls in: which reference verdicts and faces its
-// receivers have; a texel is at an edge when its 3x3 neighbourhood holds both lit and shadowed
-// receivers (a shadow boundary passes within a texel as the light sees it) or receivers of more
-// than one face.
+// Per texel of the maps that some receiver falls in: which reference verdicts and faces its
+// receivers have; a texel is at an edge when its 3x3 neighbourhood in its own map holds both lit
+// and shadowed receivers (a shadow boundary passes within a texel as the light sees it) or
+// receivers of more than one face, or the light sees more than one face there (`lightFaces`: per
+// map, the faces it sees).
 class TexelEdges {
  public:
   TexelEdges(const Frame& frame, const ShadowResult& map, const std::vector<ShadowMask>& reference,
-             const FrameBuffer<int32_t>& lightFaces)
-      : side_(uint32_t(map.lightCamera.width)), lightFaces_(lightFaces) {
+             const std::vector<Frame>& lightFaces)
+      : side_(map.lightCameras.empty() ? 1u : uint32_t(map.lightCameras[0].width)), lightFaces_(lightFaces) {
     const bool faces = frame.faceId.size() == reference.size();
     for (size_t i = 0; i < reference.size(); ++i)
       if (map.texel[i] != kNoTexel)
@@ -339,13 +367,15 @@ class TexelEdges {
 
   bool nearEdge(uint32_t texel) const {
     if (texel == kNoTexel) return false;
-    const int64_t tx = texel % side_, ty = texel / side_;
+    const uint32_t area = side_ * side_, first = texel / area * area, local = texel % area;
+    const FrameBuffer<int32_t>& seen = lightFaces_[texel / area].faceId;
+    const int64_t tx = local % side_, ty = local / side_;
     uint8_t verdicts = 0;
     int32_t face = -2;
     for (int64_t y = std::max<int64_t>(0, ty - 1); y <= std::min<int64_t>(side_ - 1, ty + 1); ++y)
       for (int64_t x = std::max<int64_t>(0, tx - 1); x <= std::min<int64_t>(side_ - 1, tx + 1); ++x) {
-        const uint32_t t = uint32_t(y) * side_ + uint32_t(x);
-        if (lightFaces_[t] != lightFaces_[texel]) return true;
+        const uint32_t t = first + uint32_t(y) * side_ + uint32_t(x);
+        if (seen[t - first] != seen[local]) return true;
         auto it = std::lower_bound(entries_.begin(), entries_.end(), t,
                                    [](const Entry& e, uint32_t value) { return e.texel < value; });
         if (it == entries_.end() || it->texel != t) continue;
@@ -365,7 +395,7 @@ class TexelEdges {
     bool severalFaces;
   };
   uint32_t side_;
-  const FrameBuffer<int32_t>& lightFaces_;
+  const std::vector<Frame>& lightFaces_;
   std::vector<Entry> entries_;
 };
 
@@ -402,17 +432,42 @@ void checkMapSize(int mapSize) {
                      "must be " + std::to_string(kMinShadowMapSize) + " to " + std::to_string(kMaxShadowMapSize));
 }
 
-}  // namespace
-
-Camera lightCamera(const Bounds3& sceneBounds, const Light& light, int mapSize) {
+// The light's space for a scene of `sceneBounds` (InputError for a bad light or bounds).
+LightSpace lightSpace(const Bounds3& sceneBounds, const Light& light) {
   checkLight(light, "shadows");
-  checkMapSize(mapSize);
   if (sceneBounds.empty() || !finite(sceneBounds.lo) || !finite(sceneBounds.hi))
     throw InputError("shadows: the scene has no geometry to frame a shadow map around");
   if (!(glm::length(sceneBounds.hi - sceneBounds.lo) > 0))
     throw InputError("shadows: the scene is a single point: no shadow map can be framed around it");
-  return light.kind == Light::Kind::Directional ? directionalCamera(sceneBounds, light.vector, mapSize)
-                                                : pointCamera(sceneBounds, light.vector, mapSize);
+  LightSpace space;
+  space.sceneDiagonal = glm::length(sceneBounds.hi - sceneBounds.lo);
+  space.perspective = light.kind == Light::Kind::Point;
+  if (space.perspective) {
+    pointAxes(sceneBounds, light.vector, space.rows);
+    space.origin = light.vector;
+  } else {
+    lightAxes(light.vector, space.rows);
+  }
+  return space;
+}
+
+}  // namespace
+
+Camera lightCamera(const Bounds3& sceneBounds, const Light& light, int mapSize) {
+  checkLight(light, "shadows");  // (before the size, as lightSpace checks it again)
+  checkMapSize(mapSize);
+  const LightSpace space = lightSpace(sceneBounds, light);
+  return mapCamera(space, space.box(sceneBounds), mapSize);
+}
+
+const char* shadowMethodName(ShadowMethod method) {
+  return method == ShadowMethod::Single ? "single" : "cascaded";
+}
+
+ShadowMethod parseShadowMethod(const std::string& name, const std::string& what) {
+  for (ShadowMethod m : {ShadowMethod::Single, ShadowMethod::Cascaded})
+    if (name == shadowMethodName(m)) return m;
+  throw InputError(what + " '" + name + "': expected single or cascaded");
 }
 
 void checkShadowOptions(const ShadowOptions& o) {
@@ -421,48 +476,168 @@ void checkShadowOptions(const ShadowOptions& o) {
     throw InputError(Setting::ShadowBias, "", "must be a finite number of texels, 0 or more");
   if (!std::isfinite(o.ambient) || o.ambient < 0 || o.ambient > 1)
     throw InputError("shadows: the ambient factor must be in [0, 1]");
+  if (o.method != ShadowMethod::Single && o.method != ShadowMethod::Cascaded)
+    throw InputError("shadows: unknown shadow method");
+  if (o.method == ShadowMethod::Cascaded) {
+    if (o.cascades < 1 || o.cascades > kMaxShadowCascades)
+      throw InputError("shadows: the cascade count " + std::to_string(o.cascades) + " must be 1 to " +
+                       std::to_string(kMaxShadowCascades));
+    // Texel numbers (ShadowResult::texel) run over all the maps in 32 bits.
+    if (uint64_t(o.cascades) * uint64_t(o.mapSize) * uint64_t(o.mapSize) >= uint64_t(kNoTexel))
+      throw InputError("shadows: " + std::to_string(o.cascades) + " cascades of " + std::to_string(o.mapSize) +
+                       "x" + std::to_string(o.mapSize) + " texels are 2^32 texels or more (use fewer or smaller maps)");
+  }
 }
+
+namespace {
+
+// The practical split scheme's blend of its two splits: 1 is logarithmic (each slice as deep,
+// relative to its distance, as the next), 0 uniform.
+constexpr double kSplitBlend = 0.75;
+// ShadowSlices::of for a pixel no map tests (background).
+constexpr uint8_t kNoSlice = 0xff;
+
+// The eye depths bounding K slices of [nearest, farthest]: slice i ends at
+// blend * n (f/n)^(i/K) + (1 - blend) (n + (f - n) i/K); uniform when n is not positive.
+std::vector<double> practicalSplits(double nearest, double farthest, int k) {
+  std::vector<double> splits(size_t(k) + 1);
+  for (int i = 0; i <= k; ++i) {
+    const double t = double(i) / k;
+    const double uniform = nearest + (farthest - nearest) * t;
+    splits[size_t(i)] = nearest > 0 ? kSplitBlend * nearest * std::pow(farthest / nearest, t) + (1 - kSplitBlend) * uniform
+                                    : uniform;
+  }
+  splits.front() = nearest;
+  splits.back() = farthest;
+  return splits;
+}
+
+// Which map tests each visible pixel, and the maps' cameras.
+struct ShadowSlices {
+  std::vector<uint8_t> of;  // per pixel: the index of its map in `cameras`, or kNoSlice
+  std::vector<Camera> cameras;
+  std::vector<double> splits;  // cascaded: the slices' bounding eye depths
+};
+
+// The single method: every visible pixel tested against one map of the whole scene.
+ShadowSlices singleSlice(const Frame& frame, const LightSpace& space, const Bounds3& sceneBounds, int mapSize) {
+  ShadowSlices out;
+  out.cameras.push_back(mapCamera(space, space.box(sceneBounds), mapSize));
+  out.of.resize(frame.triangleId.size());
+  for (size_t i = 0; i < out.of.size(); ++i) out.of[i] = frame.triangleId[i] >= 0 ? 0 : kNoSlice;
+  return out;
+}
+
+// The cascaded method: the visible depth range split into `cascades` slices, each pixel in the
+// slice its eye depth falls in, and each slice's map fitted to the light-space box of its
+// receivers, reaching from them toward the light as far as the scene's bounds (what casts on
+// them). Slices without receivers get no map.
+ShadowSlices cascadedSlices(const Frame& frame, const ReceiverFinder& finder, const LightSpace& space,
+                            const Bounds3& sceneBounds, const ShadowOptions& options) {
+  ShadowSlices out;
+  out.of.assign(frame.triangleId.size(), kNoSlice);
+  double nearest = kInf, farthest = -kInf;
+  for (size_t i = 0; i < frame.triangleId.size(); ++i)
+    if (frame.triangleId[i] >= 0) {
+      nearest = std::min(nearest, double(frame.depth[i]));
+      farthest = std::max(farthest, double(frame.depth[i]));
+    }
+  if (!(nearest <= farthest)) return out;  // nothing visible: no maps
+  const int k = options.cascades;
+  out.splits = practicalSplits(nearest, farthest, k);
+
+  // Per row and slice, the box of the receivers' light coordinates (min and max: the same
+  // whatever the order rows are combined in).
+  const size_t rows = size_t(frame.height);
+  std::vector<Bounds3> rowBoxes(rows * size_t(k));
+  parallelFor(0, rows, resolveThreads(options.threads), [&](size_t y) {
+    for (int x = 0; x < frame.width; ++x) {
+      const size_t idx = frame.index(x, int(y));
+      Receiver r;
+      if (!finder.find(x, int(y), r)) continue;
+      const auto it = std::upper_bound(out.splits.begin() + 1, out.splits.end() - 1, double(frame.depth[idx]));
+      const size_t slice = size_t(it - (out.splits.begin() + 1));
+      out.of[idx] = uint8_t(slice);
+      rowBoxes[y * size_t(k) + slice].add(space.coords(r.point));
+    }
+  });
+  const Bounds3 sceneBox = space.box(sceneBounds);
+  std::vector<uint8_t> mapOf(size_t(k), kNoSlice);
+  std::vector<double> splits{out.splits.front()};
+  for (size_t slice = 0; slice < size_t(k); ++slice) {
+    Bounds3 receivers;
+    for (size_t y = 0; y < rows; ++y) receivers.add(rowBoxes[y * size_t(k) + slice]);
+    if (receivers.empty()) continue;
+    Bounds3 box = receivers;
+    box.lo.z = std::min(box.lo.z, sceneBox.lo.z);  // the casters between the receivers and the light
+    mapOf[slice] = uint8_t(out.cameras.size());
+    out.cameras.push_back(mapCamera(space, box, options.mapSize));
+    splits.push_back(out.splits[slice + 1]);
+  }
+  out.splits = splits;  // the bounds of the slices that have maps
+  for (uint8_t& s : out.of)
+    if (s != kNoSlice) s = mapOf[s];
+  return out;
+}
+
+}  // namespace
 
 ShadowResult shadowMap(const Scene& scene, const Camera& view, const Frame& frame, const Light& light,
                        const ShadowOptions& options) {
   checkShadowOptions(options);
   const ReceiverFinder finder(scene, view, frame);
+  const LightSpace space = lightSpace(scene.bounds(), light);
   ShadowResult result;
-  result.lightCamera = lightCamera(scene.bounds(), light, options.mapSize);
-
-  // The map: the same z-buffer from the light, depth only.
   Timer timer;
+  ShadowSlices slices = options.method == ShadowMethod::Single
+                            ? singleSlice(frame, space, scene.bounds(), options.mapSize)
+                            : cascadedSlices(frame, finder, space, scene.bounds(), options);
+  result.fitMs = timer.lap();
+  result.lightCameras = std::move(slices.cameras);
+  result.splits = std::move(slices.splits);
+
   RenderOptions mapOptions;
   mapOptions.algorithm = "zbuffer";
   mapOptions.outputs = FrameOutputs::DepthOnly;
   mapOptions.depthFormat = options.depthFormat;
   mapOptions.cull = Cull::None;
   mapOptions.threads = options.threads;
-  const Frame map = render(scene, result.lightCamera, mapOptions);
-  result.mapMs = timer.lap();
-  result.mapBytes = map.stats.memory_bytes ? map.stats.memory_bytes : map.depth.size() * sizeof(float);
-
-  const MapTest test(result.lightCamera, map.depth, options.depthFormat, options.bias);
-  result.texel.assign(size_t(frame.width) * size_t(frame.height), kNoTexel);
-  result.mask = classifyPixels(frame, options.threads, [&](int x, int y) {
-    Receiver r;
-    if (!finder.find(x, y, r)) return ShadowMask::Background;
-    const bool lit = !test.shadowed(r, result.texel[frame.index(x, y)]) && facesLight(r, light);
-    return lit ? ShadowMask::Lit : ShadowMask::Shadowed;
-  });
-  result.testMs = timer.lap();
-
-  // Counted apart from the parallel pass (the facing rule again: cheap, and keeps the rows free
-  // of shared counters).
-  for (int y = 0; y < frame.height; ++y)
-    for (int x = 0; x < frame.width; ++x) {
-      const ShadowMask m = result.mask[frame.index(x, y)];
-      if (m == ShadowMask::Lit) ++result.lit;
-      if (m != ShadowMask::Shadowed) continue;
-      ++result.shadowed;
-      Receiver r;
-      if (finder.find(x, y, r) && !facesLight(r, light)) ++result.facingAway;
-    }
+  result.mask.assign(size_t(frame.width) * size_t(frame.height), ShadowMask::Background);
+  result.texel.assign(result.mask.size(), kNoTexel);
+  const uint32_t area = uint32_t(options.mapSize) * uint32_t(options.mapSize);
+  // Per row, the lit, shadowed and facing-away pixels: each row counts its own, summed after.
+  std::vector<std::array<uint64_t, 3>> rowCounts(size_t(frame.height), {0, 0, 0});
+  // One map at a time: rendered by the same z-buffer from the light, depth only, then the pixels
+  // it serves tested against it, each row writing only its own pixels.
+  for (size_t m = 0; m < result.lightCameras.size(); ++m) {
+    const Camera& cam = result.lightCameras[m];
+    timer.lap();
+    const Frame map = render(scene, cam, mapOptions);
+    result.mapMs += timer.lap();
+    result.mapBytes = std::max<uint64_t>(result.mapBytes, map.stats.memory_bytes ? map.stats.memory_bytes
+                                                                                  : map.depth.size() * sizeof(float));
+    const MapTest test(cam, map.depth, options.depthFormat, options.bias);
+    parallelFor(0, size_t(frame.height), resolveThreads(options.threads), [&](size_t y) {
+      for (int x = 0; x < frame.width; ++x) {
+        const size_t idx = frame.index(x, int(y));
+        if (slices.of[idx] != m) continue;
+        Receiver r;
+        if (!finder.find(x, int(y), r)) continue;
+        uint32_t texel = 0;
+        const bool occluded = test.shadowed(r, texel), faces = facesLight(r, light);
+        result.texel[idx] = uint32_t(m) * area + texel;
+        result.mask[idx] = !occluded && faces ? ShadowMask::Lit : ShadowMask::Shadowed;
+        ++rowCounts[y][!occluded && faces ? 0 : 1];
+        rowCounts[y][2] += !faces;
+      }
+    });
+    result.testMs += timer.lap();
+  }
+  for (const auto& [lit, shadowed, facingAway] : rowCounts) {
+    result.lit += lit;
+    result.shadowed += shadowed;
+    result.facingAway += facingAway;
+  }
   return result;
 }
 
@@ -495,13 +670,14 @@ ShadowComparison compareShadowMasks(const Scene& scene, const Frame& frame, cons
   const bool faces = frame.faceId.size() == n;
   auto refAt = [&](int x, int y) { return reference[frame.index(x, y)]; };
   auto faceAt = [&](int x, int y) { return frame.faceId[frame.index(x, y)]; };
-  RenderOptions faceOptions;  // the map again, with the faces the light sees
+  RenderOptions faceOptions;  // the maps again, with the faces the light sees
   faceOptions.algorithm = "zbuffer";
   faceOptions.outputs = FrameOutputs::FaceIds;
   faceOptions.depthFormat = options.depthFormat;
   faceOptions.threads = options.threads;
-  const Frame lightFaces = render(scene, map.lightCamera, faceOptions);
-  const TexelEdges texelEdges(frame, map, reference, lightFaces.faceId);
+  std::vector<Frame> lightFaces;
+  for (const Camera& cam : map.lightCameras) lightFaces.push_back(render(scene, cam, faceOptions));
+  const TexelEdges texelEdges(frame, map, reference, lightFaces);
   ShadowComparison c;
   for (int y = 0; y < frame.height; ++y)
     for (int x = 0; x < frame.width; ++x) {
@@ -534,16 +710,23 @@ void darkenShadowed(Frame& frame, const std::vector<ShadowMask>& mask, double am
   }
 }
 
+void addShadowTimes(Stats& stats, const ShadowResult& result, const ShadowOptions& options) {
+  if (options.method == ShadowMethod::Cascaded) stats.addTime("shadow_fit", result.fitMs);
+  stats.addTime("shadow_map", result.mapMs);
+  stats.addTime("shadow_test", result.testMs);
+}
+
 ShadowComparison addShadows(const Scene& scene, const Camera& view, Frame& frame, const Light& light,
                             const ShadowOptions& options, bool verify) {
   ShadowResult result = shadowMap(scene, view, frame, light, options);
   darkenShadowed(frame, result.mask, options.ambient);
   Stats& st = frame.stats;
-  st.addTime("shadow_map", result.mapMs);
-  st.addTime("shadow_test", result.testMs);
+  addShadowTimes(st, result, options);
   st.addMemory("shadow_map", result.mapBytes);
   st.addMemory("shadow_mask", result.mask.size() * sizeof(ShadowMask));
   st.setDetail("shadow_light", describeLight(light));
+  st.setDetail("shadow_method", std::string(shadowMethodName(options.method)));
+  st.setDetail("shadow_maps", uint64_t(result.lightCameras.size()));
   st.setDetail("shadow_map_size", uint64_t(options.mapSize));
   st.setDetail("shadow_bias_texels", options.bias);
   st.setDetail("shadow_lit_pixels", result.lit);
