@@ -11,15 +11,6 @@ import numpy as np
 from . import _hsr
 
 
-def _mesh_list(meshes, what):
-    """The meshes as a list: one mesh or a list/tuple of them (ValueError when empty)."""
-    if isinstance(meshes, (list, tuple)):
-        if not meshes:
-            raise ValueError(f"{what}: an empty list of meshes")
-        return list(meshes), True
-    return [meshes], False
-
-
 def _array(mesh, attribute, name, kind):
     """np.asarray(mesh.attribute), or ValueError naming the mesh when it has no such attribute."""
     if not hasattr(mesh, attribute):
@@ -39,16 +30,25 @@ def _face_colors_from_vertices(colors, faces):
     return mean if colors.dtype.kind == "f" else np.rint(mean).astype(np.uint8)
 
 
-def _build(items, many, faces_attribute, instance_ids, names):
-    """from_arrays of the meshes' (vertices, faces, colours or None); its ValueErrors name the
+def _scene(meshes, kind, faces_attribute, colors_of, instance_ids, names):
+    """from_arrays of one mesh or a list of them: each mesh's .vertices, its faces (attribute
+    `faces_attribute`) and colors_of(mesh, faces) (None: from_arrays' grey). ValueErrors name the
     mesh and its attribute ("meshes[2].triangles: ...") instead of from_arrays' parameters."""
-    vertices, faces, colors = zip(*items)
-    has_colors = any(c is not None for c in colors)
+    many = isinstance(meshes, (list, tuple))
+    if many and not meshes:
+        raise ValueError("meshes: an empty list of meshes")
+    vertices, faces, colors = [], [], []
+    for i, mesh in enumerate(meshes if many else [meshes]):
+        name = f"meshes[{i}]" if many else "mesh"
+        vertices.append(_array(mesh, "vertices", name, kind))
+        faces.append(_array(mesh, faces_attribute, name, kind))
+        f = faces[-1]
+        colors.append(colors_of(mesh, f) if f.ndim == 2 and f.size and f.dtype.kind in "iu" else None)
     try:
         if not many:
             return _hsr.Scene.from_arrays(vertices[0], faces[0], colors=colors[0], instance_ids=instance_ids,
                                           names=names)
-        return _hsr.Scene.from_arrays(list(vertices), list(faces), colors=list(colors) if has_colors else None,
+        return _hsr.Scene.from_arrays(vertices, faces, colors=colors if any(c is not None for c in colors) else None,
                                       instance_ids=instance_ids, names=names)
     except ValueError as e:
         attributes = {"vertices": "vertices", "faces": faces_attribute, "colors": "colors"}
@@ -60,6 +60,23 @@ def _build(items, many, faces_attribute, instance_ids, names):
         raise ValueError(re.sub(r"^(vertices|faces|colors)(\[\d+\])?:", renamed, str(e))) from None
 
 
+def _open3d_colors(mesh, faces):
+    """Open3D: the mean of the vertex colours (floats 0-1) per face, when the mesh has them."""
+    colors = np.asarray(getattr(mesh, "vertex_colors", []))
+    return _face_colors_from_vertices(colors, faces) if len(colors) else None
+
+
+def _trimesh_colors(mesh, faces):
+    """trimesh: visual.kind "vertex": the mean of the vertex colours per face; "face" (or no .kind):
+    the face colours; None (no colours set): none."""
+    visual = getattr(mesh, "visual", None)
+    kind = getattr(visual, "kind", "face")
+    if kind == "vertex":
+        return _face_colors_from_vertices(np.asarray(visual.vertex_colors), faces)
+    face_colors = getattr(visual, "face_colors", None) if kind == "face" else None
+    return None if face_colors is None else np.asarray(face_colors)
+
+
 def from_open3d(meshes, instance_ids=None, names=None):
     """A scene from an Open3D TriangleMesh or a list of them, one scene mesh (and instance id) each.
 
@@ -69,19 +86,7 @@ def from_open3d(meshes, instance_ids=None, names=None):
     mesh (default 0, 1, 2, ...); names: one per mesh. Open3D is not imported: any object with these
     attributes is read. Raises ValueError for an object that is not such a mesh.
     """
-    listed, many = _mesh_list(meshes, "meshes")
-    items = []
-    for i, mesh in enumerate(listed):
-        name = f"meshes[{i}]" if many else "mesh"
-        v = _array(mesh, "vertices", name, "an Open3D TriangleMesh")
-        f = _array(mesh, "triangles", name, "an Open3D TriangleMesh")
-        c = None
-        if hasattr(mesh, "vertex_colors"):
-            vc = np.asarray(mesh.vertex_colors)
-            if len(vc) and len(vc) == len(v) and f.ndim == 2 and f.size and f.dtype.kind in "iu":
-                c = _face_colors_from_vertices(vc, f)
-        items.append((v, f, c))
-    return _build(items, many, "triangles", instance_ids, names)
+    return _scene(meshes, "an Open3D TriangleMesh", "triangles", _open3d_colors, instance_ids, names)
 
 
 def from_trimesh(meshes, instance_ids=None, names=None):
@@ -93,18 +98,4 @@ def from_trimesh(meshes, instance_ids=None, names=None):
     per mesh (default 0, 1, 2, ...); names: one per mesh. trimesh is not imported: any object with
     these attributes is read. Raises ValueError for an object that is not such a mesh.
     """
-    listed, many = _mesh_list(meshes, "meshes")
-    items = []
-    for i, mesh in enumerate(listed):
-        name = f"meshes[{i}]" if many else "mesh"
-        v = _array(mesh, "vertices", name, "a trimesh.Trimesh")
-        f = _array(mesh, "faces", name, "a trimesh.Trimesh")
-        c = None
-        visual = getattr(mesh, "visual", None)
-        kind = getattr(visual, "kind", "face")
-        if kind == "vertex" and f.ndim == 2 and f.size and f.dtype.kind in "iu":
-            c = _face_colors_from_vertices(np.asarray(visual.vertex_colors), f)
-        elif kind == "face" and getattr(visual, "face_colors", None) is not None:
-            c = np.asarray(visual.face_colors)
-        items.append((v, f, c))
-    return _build(items, many, "faces", instance_ids, names)
+    return _scene(meshes, "a trimesh.Trimesh", "faces", _trimesh_colors, instance_ids, names)

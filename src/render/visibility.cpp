@@ -1,11 +1,13 @@
 // Per-instance visibility (include/hsr/visibility.hpp): the front end's set-up triangles grouped
-// by instance, binned into cells and rasterized cell by cell with the reference coverage (no
-// depth), each pixel stamped with the last instance that counted it; the visible pixels from the
-// frame's face ids.
+// by instance, binned into cells and covered cell by cell (the centres set-up listed for a small
+// box, else the reference half-space rasterizer; no depth), each pixel stamped with the last
+// instance that counted it; the visible pixels from the frame's face ids.
 #include <hsr/threads.hpp>
 #include <hsr/visibility.hpp>
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -73,7 +75,7 @@ std::vector<uint64_t> pixelsAlone(const Scene& scene, const Camera& camera, cons
     const int x0 = int(cell % size_t(columns)) * kCell, y0 = int(cell / size_t(columns)) * kCell;
     const int x1 = std::min(x0 + kCell, camera.width) - 1, y1 = std::min(y0 + kCell, camera.height) - 1;
     // Per pixel of the cell: 1 + the slot that counted it last, 0 = none.
-    std::vector<uint32_t> stamp(size_t(kCell) * kCell, 0);
+    std::array<uint32_t, size_t(kCell) * kCell> stamp{};
     uint32_t stampOf = 0;
     uint64_t count = 0;
     for (const uint32_t i : bins[cell]) {
@@ -82,12 +84,21 @@ std::vector<uint64_t> pixelsAlone(const Scene& scene, const Camera& camera, cons
         stampOf = slotOf[i] + 1;
         count = 0;
       }
-      rasterizeHalfSpace(algo::clippedTo(grouped[i], x0, y0, x1, y1), [&](int x, int y, double) {
+      auto cover = [&](int x, int y) {
         uint32_t& s = stamp[size_t(y - y0) * kCell + size_t(x - x0)];
         if (s == stampOf) return;
         s = stampOf;
         ++count;
-      });
+      };
+      const SetupTriangle& t = grouped[i];
+      if (t.coverage) {  // a small box whose covered centres set-up listed: those in the cell
+        for (unsigned left = t.coverage; left; left &= left - 1) {
+          const int bit = std::countr_zero(left), x = t.minX + bit % kCoverageBox, y = t.minY + bit / kCoverageBox;
+          if (x >= x0 && x <= x1 && y >= y0 && y <= y1) cover(x, y);
+        }
+        continue;
+      }
+      rasterizeHalfSpace(algo::clippedTo(t, x0, y0, x1, y1), [&](int x, int y, double) { cover(x, y); });
     }
     if (count) runs[cell].emplace_back(stampOf - 1, count);
   });
