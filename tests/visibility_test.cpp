@@ -5,10 +5,12 @@
 #include <hsr/visibility.hpp>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <map>
 
+#include "cli_runner.hpp"
 #include "test_scenes.hpp"
 
 namespace hsr {
@@ -171,6 +173,51 @@ TEST(InstanceVisibility, RefusesIdsOrFramesThatDoNotFit) {
   const Frame frame = render(scene, camera, options);
   const std::vector<int32_t> short_(scene.faceCount() - 1, 0);
   EXPECT_THROW(instanceVisibility(scene, camera, options, frame, short_), std::invalid_argument);
+}
+
+// hsr render --visibility-json: the library's counts per mesh, the same file for any thread count,
+// written with the other outputs or not at all, and bad paths refused before rendering.
+class VisibilityJson : public test::CliTest {};
+
+TEST_F(VisibilityJson, HoldsTheLibrarysCountsPerMesh) {
+  const std::string scene = "'builtin:clutter?n=6&detail=3'";
+  ASSERT_EQ(hsr("render " + scene + " --size 160x120 --threads 1 -q --visibility-json v1.json").status, 0);
+  ASSERT_EQ(hsr("render " + scene + " --size 160x120 --threads 2 -q --visibility-json v2.json").status, 0);
+  EXPECT_EQ(test::readText(file("v1.json")), test::readText(file("v2.json")));
+
+  const Scene s = makeBuiltin("clutter?n=6&detail=3");
+  const Camera camera = resolveCamera(*s.camera, 160, 120, s.bounds());
+  const RenderOptions options;
+  const std::vector<InstanceVisibility> v =
+      instanceVisibility(s, camera, options, render(s, camera, options), faceMeshIndices(s));
+  const nlohmann::json j = nlohmann::json::parse(test::readText(file("v1.json")));
+  EXPECT_EQ(j["width"], 160);
+  EXPECT_EQ(j["height"], 120);
+  ASSERT_EQ(j["instances"].size(), s.meshes.size());
+  for (size_t m = 0; m < s.meshes.size(); ++m) {
+    const nlohmann::json& e = j["instances"][m];
+    EXPECT_EQ(e["instance_id"], int(m));
+    EXPECT_EQ(e["mesh"], s.meshes[m].name);
+    EXPECT_EQ(e["px_count_all"], v[m].pixelsAlone);
+    EXPECT_EQ(e["px_count_visib"], v[m].pixelsVisible);
+    EXPECT_EQ(e["visib_fract"], v[m].fraction());
+  }
+}
+
+TEST_F(VisibilityJson, BadPathsAndOutputsAreRefused) {
+  std::filesystem::create_directory(file("adir"));
+  for (const std::string flags : {"--visibility-json ''", "--visibility-json adir", "--outputs depth --visibility-json v.json",
+                                  "--visibility-json v.json --stats v.json"}) {
+    const test::CliResult r = hsr("render builtin:cubes --size 32x24 " + flags);
+    EXPECT_EQ(r.status, 2) << flags << "\n" << r;
+    EXPECT_TRUE(r.oneErrorLine()) << r;
+    EXPECT_NE(r.err.find("--visibility-json"), std::string::npos) << r;
+    EXPECT_FALSE(std::filesystem::exists(file("v.json")));
+  }
+  // A file that cannot be created: exit 1, and no output written.
+  const test::CliResult r = hsr("render builtin:cubes --size 32x24 -o c.png --visibility-json missing/v.json");
+  EXPECT_EQ(r.status, 1) << r;
+  EXPECT_FALSE(std::filesystem::exists(file("c.png")));
 }
 
 }  // namespace
