@@ -1,7 +1,8 @@
 // instanceVisibility (include/hsr/visibility.hpp): each instance's pixels covered alone equal the
 // covered pixels of rendering its faces alone, and its visible pixels those of the frame, on
 // built-in scenes, several cameras (one cutting the scene with its near plane), culling, instances
-// of several meshes apart, and 1 or 2 threads.
+// of several meshes apart, and 1 or 2 threads; a VisibilityCounter kept from view to view counts
+// as a fresh one; the CLI's --visibility-json.
 #include <hsr/visibility.hpp>
 
 #include <gtest/gtest.h>
@@ -122,6 +123,32 @@ TEST(InstanceVisibility, InstancesOfSeveralMeshesApartCountEachPixelOnce) {
   // Meshes m, m + 3, m + 6, ... make one instance: they interleave in submission order and overlap.
   const Scene scene = makeBuiltin("clutter?n=14&detail=3");
   checkScene(scene, [](size_t m) { return int32_t(100 + 7 * (m % 3)); }, Cull::None, 160, 120);
+}
+
+TEST(InstanceVisibility, ACounterKeptFromViewToViewCountsAsAFreshOne) {
+  const Scene scene = makeBuiltin("clutter?n=10&detail=3");
+  for (const bool apart : {false, true}) {  // instances of one mesh each, or of meshes apart
+    std::vector<int32_t> faceInstance = faceMeshIndices(scene);
+    if (apart)
+      for (int32_t& id : faceInstance) id %= 3;
+    VisibilityCounter counter(scene, faceInstance);
+    int view = 0;
+    for (const auto [width, height] : {std::pair{160, 120}, {64, 48}, {200, 150}, {160, 120}}) {
+      for (const Camera& camera : camerasFor(scene, width, height)) {
+        RenderOptions options;
+        options.threads = 1 + view++ % 2;
+        const Frame frame = render(scene, camera, options);
+        const std::vector<InstanceVisibility> kept = counter.count(camera, options, frame);
+        const std::vector<InstanceVisibility> fresh = instanceVisibility(scene, camera, options, frame, faceInstance);
+        ASSERT_EQ(kept.size(), fresh.size());
+        for (size_t i = 0; i < kept.size(); ++i) {
+          EXPECT_EQ(kept[i].instance, fresh[i].instance);
+          EXPECT_EQ(kept[i].pixelsAlone, fresh[i].pixelsAlone) << "view " << view << ", instance " << i;
+          EXPECT_EQ(kept[i].pixelsVisible, fresh[i].pixelsVisible);
+        }
+      }
+    }
+  }
 }
 
 TEST(InstanceVisibility, FacesOfNoInstanceAreLeftOut) {

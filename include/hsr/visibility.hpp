@@ -9,6 +9,7 @@
 #include <hsr/scene.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -37,8 +38,29 @@ struct InstanceVisibility {
 /// pixelsVisible: the frame's pixels whose face is the instance's.
 /// Runs on options.threads threads; the counts are the same for every thread count. Throws
 /// std::invalid_argument when faceInstance or the frame does not fit the scene and camera.
+/// (A VisibilityCounter made for this one view.)
 std::vector<InstanceVisibility> instanceVisibility(const Scene& scene, const Camera& camera,
                                                    const RenderOptions& options, const Frame& frame,
                                                    std::span<const int32_t> faceInstance);
+
+/// instanceVisibility made for one scene and its instance ids, kept from view to view: what a
+/// view needs (the set-up triangles, their order, the bands of rows they are binned to) is kept
+/// and reused, as a Renderer keeps its algorithm's, so warm views fault no fresh memory in. The
+/// scene must outlive the counter; one thread counts with it at a time.
+class VisibilityCounter {
+ public:
+  /// Throws std::invalid_argument when faceInstance does not hold one id per face of `scene`.
+  VisibilityCounter(const Scene& scene, std::span<const int32_t> faceInstance);
+  ~VisibilityCounter();
+  VisibilityCounter(VisibilityCounter&&) noexcept;
+  VisibilityCounter& operator=(VisibilityCounter&&) noexcept;
+
+  /// instanceVisibility(scene, camera, options, frame, faceInstance) of the counter's scene and ids.
+  std::vector<InstanceVisibility> count(const Camera& camera, const RenderOptions& options, const Frame& frame);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 }  // namespace hsr

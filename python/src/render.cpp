@@ -3,7 +3,6 @@
 #include "buffers.hpp"
 
 #include <hsr/limits.hpp>
-#include <hsr/visibility.hpp>
 
 #include <pybind11/stl.h>
 
@@ -268,7 +267,7 @@ ViewVisibility visibilityOf(const SceneData& d, const hsr::Camera& camera, const
                             const hsr::Frame& frame, int threads) {
   hsr::RenderOptions counted = options;
   counted.threads = threads;
-  return hsr::instanceVisibility(d.scene, camera, counted, frame, d.faceInstance);
+  return d.countVisibility(camera, counted, frame);
 }
 
 py::dict renderOne(const SceneData& d, const hsr::Camera& camera, const hsr::RenderOptions& options, const Wanted& wanted) {
