@@ -18,5 +18,6 @@
 #include <hsr/occlusion.hpp>
 #include <hsr/precision.hpp>
 #include <hsr/views.hpp>
+#include <hsr/visibility.hpp>
 #include <hsr/svg.hpp>
 #include <hsr/threads.hpp>
