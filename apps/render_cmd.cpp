@@ -4,9 +4,11 @@
 // are shared with hsr-mpi (render_cmd.hpp, apps/mpi_main.cpp).
 #include <hsr/hsr.hpp>
 #include <hsr/threads.hpp>
+#include <hsr/visibility.hpp>
 
 #include <fmt/core.h>
 #include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <memory>
@@ -54,8 +56,12 @@ void printSummary(const Job& job, const hsr::Stats& s, double wallMs, const std:
   if (!written.empty()) fmt::print("  wrote {}\n", fmt::join(written, ", "));
 }
 
-// --instance-ids and --barycentric: their file names, and the ids they are resolved from.
+// --instance-ids, --barycentric and --visibility-json: their file names, and the ids they are
+// resolved from.
 void checkAttributeOutputs(const RenderFlags& f, hsr::FrameOutputs kept) {
+  if (!f.visibilityJson.empty() && !has(kept, hsr::FrameOutputs::FaceIds))
+    throw InputError("--visibility-json: the outputs kept (" + hsr::frameOutputsName(kept) +
+                     ") have no face ids (add face)");
   if (!f.instanceIds.empty()) {
     hsr::checkInstanceIdsPath(f.instanceIds);
     if (!has(kept, hsr::FrameOutputs::FaceIds))
@@ -69,8 +75,32 @@ void checkAttributeOutputs(const RenderFlags& f, hsr::FrameOutputs kept) {
   }
 }
 
+// --visibility-json: per mesh (its instance id is its position among the scene's meshes), the
+// pixels it covers alone, the pixels it shows and their ratio, with the BOP toolkit's names.
+std::string visibilityJson(const Job& job, const hsr::Frame& frame) {
+  const std::vector<hsr::InstanceVisibility> counts =
+      hsr::instanceVisibility(job.scene, job.camera, job.options, frame, hsr::faceMeshIndices(job.scene));
+  nlohmann::ordered_json instances = nlohmann::ordered_json::array();
+  for (const hsr::InstanceVisibility& v : counts)
+    instances.push_back({{"instance_id", v.instance},
+                         {"mesh", job.scene.meshes[size_t(v.instance)].name},
+                         {"px_count_all", v.pixelsAlone},
+                         {"px_count_visib", v.pixelsVisible},
+                         {"visib_fract", v.fraction()}});
+  nlohmann::ordered_json out = {{"scene", job.sceneName},
+                                {"width", frame.width},
+                                {"height", frame.height},
+                                {"algorithm", frame.stats.algorithm},
+                                {"instances", std::move(instances)}};
+  return out.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace) + "\n";
+}
+
 void writeAttributeOutputs(const RenderFlags& f, const Job& job, const hsr::Frame& frame,
-                           std::vector<std::string>& written) {
+                           const std::string& visibility, std::vector<std::string>& written) {
+  if (!f.visibilityJson.empty()) {
+    hsr::writeTextFile(visibility, f.visibilityJson);
+    written.push_back(f.visibilityJson);
+  }
   if (!f.instanceIds.empty()) {
     hsr::writeInstanceIds(frame, hsr::faceMeshIndices(job.scene), f.instanceIds);
     written.push_back(f.instanceIds);
@@ -155,6 +185,12 @@ int finishRender(const RenderFlags& f, const Job& job, hsr::Frame& frame,
   if (f.shadows)
     hsr::addShadows(job.scene, job.camera, frame, f.shadowLight(job), f.checkedShadowOptions(job.options), f.verify);
   double wallMs = millisecondsSince(start);
+  std::string visibility;  // counted before the statistics are written, which time it
+  if (!f.visibilityJson.empty()) {
+    const auto visibilityStart = std::chrono::steady_clock::now();
+    visibility = visibilityJson(job, frame);
+    frame.stats.addTime("visibility", millisecondsSince(visibilityStart));
+  }
 
   // All outputs or none: each is written to a temporary file, and all are renamed at the end.
   std::vector<std::string> written;
@@ -173,7 +209,7 @@ int finishRender(const RenderFlags& f, const Job& job, hsr::Frame& frame,
       o.write(frame, o.path);
       written.push_back(o.path);
     }
-    writeAttributeOutputs(f, job, frame, written);
+    writeAttributeOutputs(f, job, frame, visibility, written);
     if (!f.stats.empty() && f.stats != "-") {
       hsr::writeTextFile(statsJson + "\n", f.stats);
       written.push_back(f.stats);
@@ -218,6 +254,12 @@ void declareRenderFlags(CLI::App& cmd, RenderFlags* f) {
                  "background; for a triangle face, of its vertices in file order (--ids names the face)")
       ->type_name("BARY.npy")
       ->group(outputs);
+  cmd.add_option("--visibility-json", f->visibilityJson,
+                 "Per mesh (instance id = its position, as for --instance-ids): px_count_all (pixels it covers "
+                 "rendered alone), px_count_visib (pixels it shows) and visib_fract (their ratio, 0 when it covers "
+                 "none), counted in one pass besides the render")
+      ->type_name("VIS.json")
+      ->group(outputs);
   cmd.add_option("--stats", f->stats, "Statistics JSON ('-': standard output, as --json)")->type_name("STATS.json")->group(outputs);
   cmd.add_option("--svg", f->svg,
                  "Vector image: the painting order of painter, newell or bsp as SVG polygons, back to front "
@@ -228,8 +270,8 @@ void declareRenderFlags(CLI::App& cmd, RenderFlags* f) {
       {"--out", &f->out},           {"--ids", &f->ids},
       {"--depth", &f->depth},       {"--depth-image", &f->depthImage},
       {"--overdraw-image", &f->overdrawImage}, {"--instance-ids", &f->instanceIds},
-      {"--barycentric", &f->barycentric},      {"--stats", &f->stats},
-      {"--svg", &f->svg}};
+      {"--barycentric", &f->barycentric},      {"--visibility-json", &f->visibilityJson},
+      {"--stats", &f->stats},                  {"--svg", &f->svg}};
   for (auto [flag, path] : outputFlags)
     f->outputFlags.push_back({flag, cmd.get_option(flag), path, std::string_view(flag) == "--stats"});
   cmd.add_flag("--verify", f->verify, "Also render the exact reference and count wrong/ambiguous pixels");

@@ -21,6 +21,7 @@ struct RenderFlags : ShadowFlags {
   ViewFlags view;
   std::string out, ids, depth, depthImage, overdrawImage, stats, svg;
   std::string instanceIds, barycentric;  // attributes resolved from the ids (hsr/views.hpp)
+  std::string visibilityJson;            // per-mesh visible fractions (hsr/visibility.hpp)
   bool verify = false, quiet = false, json = false;
   std::vector<hsr::cli::OutputFlag> outputFlags;  // every output flag, checked as a set
 };

@@ -9,7 +9,7 @@ packages=(build-essential cmake ninja-build pkg-config
   libjs-chart.js chromium fonts-dejavu-core python3-jsonschema
   python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest
   python3-opengl libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6
-  librsvg2-bin openmpi-bin libopenmpi-dev python3-distributed "$@")
+  librsvg2-bin openmpi-bin libopenmpi-dev python3-distributed python3-open3d "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -19,5 +19,6 @@
 #include <hsr/depth_compression.hpp>
 #include <hsr/precision.hpp>
 #include <hsr/views.hpp>
+#include <hsr/visibility.hpp>
 #include <hsr/svg.hpp>
 #include <hsr/threads.hpp>

@@ -3,6 +3,7 @@
 #pragma once
 #include <hsr/hsr.hpp>
 #include <hsr/views.hpp>
+#include <hsr/visibility.hpp>
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -37,6 +38,13 @@ struct SceneData {
   void render(const hsr::Camera& camera, const hsr::RenderOptions& options, hsr::Frame& frame) const;
   mutable std::mutex rendererMutex;
   mutable std::optional<hsr::Renderer> renderer;
+
+  /// The per-instance visibility of `frame`, a view of this scene (hsr::VisibilityCounter), with
+  /// a counter the scene keeps for later calls: one per call running at the same time.
+  std::vector<hsr::InstanceVisibility> countVisibility(const hsr::Camera& camera, const hsr::RenderOptions& options,
+                                                       const hsr::Frame& frame) const;
+  mutable std::mutex countersMutex;
+  mutable std::vector<hsr::VisibilityCounter> idleCounters;
 };
 /// Builds the SceneData of a finalized scene; `instances` per mesh (empty: the mesh index).
 std::shared_ptr<SceneData> makeSceneData(hsr::Scene&& scene, std::vector<int32_t> instances = {});

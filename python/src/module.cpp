@@ -309,6 +309,8 @@ size (arrays (N, H, W[, C]), the views spread over the threads). Returns a dict 
   barycentric  float32 (.., 3): the pixel centre on the visible triangle, b0 v0 + b1 v1 + b2 v2
   normal       float32 (.., 3): unit world normal of the visible triangle, 0 on the background
   color        uint8 (.., 4): the shaded RGBA image (shading: lambert, flat or faceid)
+  visibility   per instance, sorted by id: a structured array (N views first) of instance_id,
+               px_count_all (pixels covered alone), px_count_visib, visib_fract (docs/python.md)
 algorithm, params, depth_format ("f32:reversed" by default), cull ("none", "back", "front") are
 `hsr render`'s --algorithm, --param, --depth-format, --cull; threads 0 uses every core. The GIL is
 released while rendering; the arrays are the module's buffers, not copies.)");

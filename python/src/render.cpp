@@ -8,6 +8,7 @@
 
 
 #include <array>
+#include <cstddef>
 #include <algorithm>
 #include <cstring>
 #include <thread>
@@ -16,17 +17,17 @@ namespace hsrpy {
 
 namespace {
 
-enum Output { Depth, FaceId, InstanceId, TriangleId, Barycentric, Normal, Color, kOutputCount };
+enum Output { Depth, FaceId, InstanceId, TriangleId, Barycentric, Normal, Color, Visibility, kOutputCount };
 struct OutputInfo {
   const char* name;
-  size_t channels;  // per pixel (1: an (H, W) image, else (H, W, channels))
+  size_t channels;  // per pixel (1: an (H, W) image, else (H, W, channels); 0: per instance, not an image)
   size_t bytes;     // per channel
   const char* dtype;
 };
 constexpr OutputInfo kOutputs[kOutputCount] = {
     {"depth", 1, 4, "float32"},       {"face_id", 1, 4, "int32"}, {"instance_id", 1, 4, "int32"},
     {"triangle_id", 1, 4, "int32"},   {"barycentric", 3, 4, "float32"}, {"normal", 3, 4, "float32"},
-    {"color", 4, 1, "uint8"}};
+    {"color", 4, 1, "uint8"},         {"visibility", 0, 0, ""}};
 using Wanted = std::array<bool, kOutputCount>;
 
 std::string outputNames() {
@@ -59,7 +60,7 @@ Wanted parseOutputs(py::handle outputs) {
 // What the z-buffer must resolve for the outputs (depth alone: the CLI's --outputs depth).
 hsr::FrameOutputs frameOutputs(const Wanted& w) {
   uint8_t flags = 0;
-  if (w[FaceId] || w[InstanceId]) flags |= uint8_t(hsr::FrameOutputs::FaceIds);
+  if (w[FaceId] || w[InstanceId] || w[Visibility]) flags |= uint8_t(hsr::FrameOutputs::FaceIds);
   if (w[TriangleId] || w[Barycentric] || w[Normal]) flags |= uint8_t(hsr::FrameOutputs::TriangleIds);
   if (w[Color]) flags |= uint8_t(hsr::FrameOutputs::Color);
   return hsr::FrameOutputs(flags);
@@ -180,7 +181,8 @@ Blocks allocate(const Wanted& wanted, size_t views, size_t pixels) {
   Blocks b;
   b.pixels = pixels;
   for (int o = 0; o < kOutputCount; ++o)
-    if (wanted[size_t(o)]) b.block[size_t(o)] = takeBlock(views * pixels * kOutputs[o].channels * kOutputs[o].bytes);
+    if (wanted[size_t(o)] && kOutputs[o].channels)
+      b.block[size_t(o)] = takeBlock(views * pixels * kOutputs[o].channels * kOutputs[o].bytes);
   return b;
 }
 
@@ -233,22 +235,63 @@ void releaseFrame(hsr::Frame& frame) {
   pool.give(std::move(frame.color));
 }
 
+// "visibility": per instance of the scene (sorted by id), its pixels covered alone, visible, and
+// their ratio, as a NumPy structured array with the BOP toolkit's names; views first in a batch.
+struct VisibilityRow {
+  int32_t instance;
+  int32_t unused;
+  int64_t all, visible;
+  double fraction;
+};
+using ViewVisibility = std::vector<hsr::InstanceVisibility>;
+
+py::array visibilityArray(const std::vector<ViewVisibility>& views, bool batch) {
+  const py::dtype dtype(py::list(py::make_tuple("instance_id", "px_count_all", "px_count_visib", "visib_fract")),
+                        py::list(py::make_tuple("<i4", "<i8", "<i8", "<f8")),
+                        py::list(py::make_tuple(offsetof(VisibilityRow, instance), offsetof(VisibilityRow, all),
+                                                offsetof(VisibilityRow, visible), offsetof(VisibilityRow, fraction))),
+                        py::ssize_t(sizeof(VisibilityRow)));
+  const size_t instances = views.empty() ? 0 : views[0].size();
+  std::vector<py::ssize_t> shape{py::ssize_t(instances)};
+  if (batch) shape.insert(shape.begin(), py::ssize_t(views.size()));
+  py::array out(dtype, shape);
+  auto* rows = static_cast<VisibilityRow*>(out.mutable_data());
+  for (const ViewVisibility& view : views)
+    for (const hsr::InstanceVisibility& v : view)
+      *rows++ = {v.instance, 0, int64_t(v.pixelsAlone), int64_t(v.pixelsVisible), v.fraction()};
+  return out;
+}
+
+// The counts of one view (options.threads threads).
+ViewVisibility visibilityOf(const SceneData& d, const hsr::Camera& camera, const hsr::RenderOptions& options,
+                            const hsr::Frame& frame, int threads) {
+  hsr::RenderOptions counted = options;
+  counted.threads = threads;
+  return d.countVisibility(camera, counted, frame);
+}
+
 py::dict renderOne(const SceneData& d, const hsr::Camera& camera, const hsr::RenderOptions& options, const Wanted& wanted) {
   hsr::Frame frame = pooledFrame(camera, options.outputs);
   Wanted attributes = wanted;
   attributes[Depth] = attributes[FaceId] = attributes[TriangleId] = attributes[Color] = false;
   Blocks blocks;
+  std::vector<ViewVisibility> visibility;
   {
     py::gil_scoped_release unlocked;
     d.render(camera, options, frame);
     blocks = allocate(attributes, 1, frame.depth.size());
     resolveAttributes(d, camera, frame, blocks, 0, threadsOf(options));
+    if (wanted[Visibility]) visibility.push_back(visibilityOf(d, camera, options, frame, options.threads));
   }
   const std::vector<py::ssize_t> image{frame.height, frame.width};
   py::dict result;
   for (int o = 0; o < kOutputCount; ++o) {
     if (!wanted[size_t(o)]) continue;
     const Output out = Output(o);
+    if (out == Visibility) {
+      result[kOutputs[o].name] = visibilityArray(visibility, false);
+      continue;
+    }
     const py::dtype dtype(kOutputs[o].dtype);
     py::array a;
     switch (out) {
@@ -267,6 +310,7 @@ py::dict renderBatch(const SceneData& d, const std::vector<hsr::Camera>& cameras
                      const Wanted& wanted) {
   const size_t pixels = size_t(cameras[0].width) * size_t(cameras[0].height);
   Blocks blocks;
+  std::vector<ViewVisibility> visibility(wanted[Visibility] ? cameras.size() : 0);
   {
     py::gil_scoped_release unlocked;
     blocks = allocate(wanted, cameras.size(), pixels);
@@ -277,6 +321,7 @@ py::dict renderBatch(const SceneData& d, const std::vector<hsr::Camera>& cameras
         [&](size_t view, const hsr::Frame& frame, int threads) {
           copyFrame(frame, blocks, view);
           resolveAttributes(d, cameras[view], frame, blocks, view, threads);
+          if (!visibility.empty()) visibility[view] = visibilityOf(d, cameras[view], options, frame, threads);
         },
         frames);
     for (hsr::Frame& f : frames) releaseFrame(f);
@@ -284,7 +329,8 @@ py::dict renderBatch(const SceneData& d, const std::vector<hsr::Camera>& cameras
   const std::vector<py::ssize_t> image{py::ssize_t(cameras.size()), cameras[0].height, cameras[0].width};
   py::dict result;
   for (int o = 0; o < kOutputCount; ++o)
-    if (wanted[size_t(o)])
+    if (wanted[size_t(o)] && o == Visibility) result[kOutputs[o].name] = visibilityArray(visibility, true);
+    else if (wanted[size_t(o)])
       result[kOutputs[o].name] =
           handOver(std::move(blocks.block[size_t(o)]), shapeOf(Output(o), image), py::dtype(kOutputs[o].dtype));
   return result;

@@ -24,6 +24,24 @@ void SceneData::render(const hsr::Camera& camera, const hsr::RenderOptions& opti
   renderer->render(camera, options, frame);
 }
 
+std::vector<hsr::InstanceVisibility> SceneData::countVisibility(const hsr::Camera& camera,
+                                                                const hsr::RenderOptions& options,
+                                                                const hsr::Frame& frame) const {
+  std::optional<hsr::VisibilityCounter> counter;
+  {
+    std::lock_guard lock(countersMutex);
+    if (!idleCounters.empty()) {
+      counter.emplace(std::move(idleCounters.back()));
+      idleCounters.pop_back();
+    }
+  }
+  if (!counter) counter.emplace(scene, faceInstance);
+  std::vector<hsr::InstanceVisibility> counts = counter->count(camera, options, frame);
+  std::lock_guard lock(countersMutex);
+  idleCounters.push_back(std::move(*counter));
+  return counts;
+}
+
 std::shared_ptr<SceneData> makeSceneData(hsr::Scene&& scene, std::vector<int32_t> instances) {
   auto data = std::make_shared<SceneData>();
   data->scene = std::move(scene);
