@@ -122,9 +122,9 @@ void setCounters(Stats& s, const std::vector<uint64_t>& c) {
 }
 
 // What needs the whole scene on rank 0 (the ranks hold shares): the check against the reference,
-// shadows, and the attributes resolved from the ids.
+// shadows, the attributes resolved from the ids, and the visibility counts (each mesh alone).
 bool needsWholeScene(const cli::RenderFlags& f) {
-  return f.verify || f.shadows || !f.instanceIds.empty() || !f.barycentric.empty();
+  return f.verify || f.shadows || !f.instanceIds.empty() || !f.barycentric.empty() || !f.visibilityJson.empty();
 }
 
 // This rank's part of the scene as loaded, before the ranks agree on the whole's bounds and ids.
