@@ -195,35 +195,54 @@ TEST_F(SvgTest, PainterOnItsCycleDecodesWrong) {
   EXPECT_GT(d.wrong, 50u);
 }
 
-// Pixels whose 3x3 neighbourhood in `ids` is one face (or all background): no edge of the
-// visible picture passes near them, so an anti-aliasing renderer must show that face's colour.
-std::vector<bool> interiorOf(const std::vector<int32_t>& ids, int w, int h) {
-  std::vector<bool> inside(ids.size(), false);
+// Pixels of a w x h image away from every visible edge: the 3x3 pixels around them show one face
+// (or the background) at each of kSamples x kSamples points a pixel, in `fine`, face ids of the
+// same view at kSamples times the size (so even a sliver thinner than a pixel is seen). Sets
+// `ids` to each pixel's face.
+constexpr int kSamples = 4;
+std::vector<bool> interiorOf(const Frame& fine, int w, int h, std::vector<int32_t>& ids) {
+  std::vector<bool> one(size_t(w) * size_t(h)), inside(one.size(), false);
+  ids.assign(one.size(), -1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int32_t id = fine.faceId[size_t(kSamples * y) * size_t(fine.width) + size_t(kSamples * x)];
+      bool same = true;
+      for (int sy = 0; sy < kSamples; ++sy)
+        for (int sx = 0; sx < kSamples; ++sx)
+          same &= fine.faceId[size_t(kSamples * y + sy) * size_t(fine.width) + size_t(kSamples * x + sx)] == id;
+      ids[size_t(y) * size_t(w) + size_t(x)] = id;
+      one[size_t(y) * size_t(w) + size_t(x)] = same;
+    }
   for (int y = 1; y + 1 < h; ++y)
     for (int x = 1; x + 1 < w; ++x) {
-      const int32_t id = ids[size_t(y) * size_t(w) + size_t(x)];
+      const size_t i = size_t(y) * size_t(w) + size_t(x);
       bool same = true;
       for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) same &= ids[size_t(y + dy) * size_t(w) + size_t(x + dx)] == id;
-      inside[size_t(y) * size_t(w) + size_t(x)] = same;
+        for (int dx = -1; dx <= 1; ++dx) {
+          const size_t j = size_t(y + dy) * size_t(w) + size_t(x + dx);
+          same &= one[j] && ids[j] == ids[i];
+        }
+      inside[i] = same;
     }
   return inside;
 }
 
-// Where bsp and newell split faces, the SVG's pieces of a face are one <path>: rasterized by
-// rsvg-convert with its default anti-aliasing, the interior pixels show their face, no seam along
-// the splits. (Written as one <polygon> per piece, 1,000-1,300 of these interior pixels blend a
-// face with what lies beneath along the splits.)
+// Where bsp and newell split faces, the SVG paints a face's pieces as one <path> (and repaints
+// the parts of earlier pieces beside later ones): rasterized by rsvg-convert with its default
+// anti-aliasing, the pixels away from edges show their face, with few seams along the splits. (One
+// <polygon> per piece gives 794 (bsp) and 179 (newell) seam pixels of 90,617 here.)
 TEST_F(SvgTest, SplitFacesShowNoSeamsUnderAntiAliasing) {
   const Scene scene = loadScene("builtin:random?n=300&seed=5");
   const int w = 400, h = 300;
-  const Camera camera = resolveCamera(*scene.camera, w, h, scene.bounds());
+  const CameraSpec spec = conformance::ownPose(scene).spec;
+  const Camera camera = resolveCamera(spec, w, h, scene.bounds());
   RenderOptions ref;
   ref.algorithm = "raycast";
-  const Frame reference = render(scene, camera, ref);
-  const std::vector<int32_t> ids(reference.faceId.begin(), reference.faceId.end());
-  const std::vector<bool> inside = interiorOf(ids, w, h);
+  const Frame fine = render(scene, resolveCamera(spec, kSamples * w, kSamples * h, scene.bounds()), ref);
+  std::vector<int32_t> ids;
+  const std::vector<bool> inside = interiorOf(fine, w, h, ids);
   const uint64_t interior = uint64_t(std::count(inside.begin(), inside.end(), true));
+  EXPECT_GT(interior, uint64_t(w * h) / 2);
   for (const char* algorithm : {"bsp", "newell"}) {
     RenderOptions options;
     options.algorithm = algorithm;
@@ -238,8 +257,7 @@ TEST_F(SvgTest, SplitFacesShowNoSeamsUnderAntiAliasing) {
     uint64_t seams = 0;
     for (size_t i = 0; i < inside.size(); ++i) seams += inside[i] && decodeFace(pixels + 3 * i) != ids[i];
     stbi_image_free(pixels);
-    EXPECT_GT(interior, uint64_t(w * h) / 2);
-    EXPECT_LE(seams, 20u) << algorithm << ": " << seams << " of " << interior << " interior pixels";
+    EXPECT_LE(seams, 40u) << algorithm << ": " << seams << " of " << interior << " pixels away from edges";
   }
 }
 
@@ -262,7 +280,7 @@ TEST_F(SvgTest, FaceIdColoursDecodeAsDocumented) {
   stbi_image_free(b);
 
   const Scene scene = loadScene("builtin:random?n=300&seed=5");
-  const Camera camera = resolveCamera(*scene.camera, 200, 150, scene.bounds());
+  const Camera camera = resolveCamera(conformance::ownPose(scene).spec, 200, 150, scene.bounds());
   RenderOptions options;
   options.algorithm = "bsp";
   options.shading = Shading::FaceId;
@@ -277,11 +295,29 @@ TEST_F(SvgTest, FaceIdColoursDecodeAsDocumented) {
   }
 }
 
-// Paint groups: consecutive, numbered in order, one face and colour each; repaints only in an
-// opaque face's first group, each a copy of a piece painted in a later group of that face.
+// Whether every vertex of `part` lies in the convex polygon `piece` (to 1e-6 pixel; edges of less
+// than 1e-7 pixel, a vertex repeated up to rounding, have no direction to test).
+bool insideConvex(const ScreenPolygons& s, const ScreenPolygon& part, const ScreenPolygon& piece) {
+  double area = 0;
+  for (uint32_t k = 0; k < piece.count; ++k) {
+    const dvec2 a = s.points[piece.first + k], b = s.points[piece.first + (k + 1) % piece.count];
+    area += a.x * b.y - a.y * b.x;
+  }
+  for (uint32_t v = 0; v < part.count; ++v)
+    for (uint32_t k = 0; k < piece.count; ++k) {
+      const dvec2 a = s.points[piece.first + k], e = s.points[piece.first + (k + 1) % piece.count] - a;
+      const dvec2 d = s.points[part.first + v] - a;
+      const double length = glm::length(e);
+      if (length > 1e-7 && (area > 0 ? 1 : -1) * (e.x * d.y - e.y * d.x) / length < -1e-6) return false;
+    }
+  return true;
+}
+
+// Paint groups: consecutive, numbered in order, one face and colour each; a repaint is a part of
+// a piece of the same face painted in an earlier group.
 TEST_F(SvgTest, PaintGroupsHoldOneFaceEach) {
   const Scene scene = loadScene("builtin:random?n=300&seed=5");
-  const Camera camera = resolveCamera(*scene.camera, 200, 150, scene.bounds());
+  const Camera camera = resolveCamera(conformance::ownPose(scene).spec, 200, 150, scene.bounds());
   RenderOptions options;
   options.algorithm = "bsp";
   const ScreenPolygons painted = screenPolygons(scene, camera, options);
@@ -296,18 +332,16 @@ TEST_F(SvgTest, PaintGroupsHoldOneFaceEach) {
     EXPECT_EQ(a.face, b.face);
     EXPECT_EQ(a.color, b.color);
     merged += !b.repaint;
-    repaints += b.repaint;
   }
-  EXPECT_GT(merged, 0u);     // pieces of a face joined
-  EXPECT_GT(repaints, 0u);  // and some could not
-  for (const ScreenPolygon& u : painted.polygons) {
-    if (!u.repaint) continue;
-    size_t copies = 0;
-    for (const ScreenPolygon& p : painted.polygons)
-      copies += !p.repaint && p.group > u.group && p.face == u.face && p.count == u.count &&
-                std::equal(&painted.points[p.first], &painted.points[p.first] + p.count, &painted.points[u.first]);
-    EXPECT_EQ(copies, 1u);
+  for (const ScreenPolygon& r : painted.polygons) {
+    if (!r.repaint) continue;
+    ++repaints;
+    EXPECT_TRUE(std::any_of(painted.polygons.begin(), painted.polygons.end(), [&](const ScreenPolygon& p) {
+      return !p.repaint && p.group < r.group && p.face == r.face && insideConvex(painted, r, p);
+    }));
   }
+  EXPECT_GT(merged, 0u);    // pieces of a face joined
+  EXPECT_GT(repaints, 0u);  // and some faces still span groups
 }
 
 TEST_F(SvgTest, CoordinatesAreCompactAndInsideTheImage) {
