@@ -5,9 +5,11 @@ at 640x480 (Agg) on bench/peer/vector_peer.py's scenes: two interpenetrating hei
 surface, as two plot_surface calls make) and 1,000 random interpenetrating triangles. A redraw is fig.canvas.draw() after turning the
 view by 7 degrees (so hsr orders again); the median of DRAWS redraws after one warm-up. Also the
 SVG's size, and wrong pixels away from edges against raycast (python/tests/test_matplotlib.py's
-check). Prints a Markdown table. See docs/matplotlib.md.
+check). Prints a Markdown table. With "wrong": instead, the tests' wrong-pixel table (every scene
+of vector_peer.py in the tests' two views at 400x300, matplotlib's own collections against
+hsr.matplotlib). See docs/matplotlib.md.
 
-Usage: PYTHONPATH=build/python /usr/bin/python3 bench/mpl_redraw.py [DRAWS]
+Usage: PYTHONPATH=build/python /usr/bin/python3 bench/mpl_redraw.py [DRAWS | wrong]
 """
 import io
 import os
@@ -36,7 +38,20 @@ CASES = [("surfaces", lambda: vector_peer.surfaces(16)), ("surfaces", lambda: ve
          ("random-triangles", lambda: vector_peer.random_triangles(1000, seed=7))]
 
 
+def wrong_table():
+    print("| scene | polygons | view (elev, azim) | matplotlib | hsr bsp | pixels tested |")
+    print("|---|---|---|---|---|---|")
+    for name, make in vector_peer.SCENES:
+        for view in check.VIEWS:
+            theirs, tested = check.wrong_pixels(name, view, check.own_collections(name))
+            ours, _ = check.wrong_pixels(name, view, check.hsr_collection)
+            print("| %s | %d | %s | %d | %d | %d |" % (name, len(make()), view, theirs, ours, tested))
+            sys.stdout.flush()
+
+
 def main():
+    if sys.argv[1:] == ["wrong"]:
+        return wrong_table()
     draws = int(sys.argv[1]) if len(sys.argv) > 1 else 5
     check.W, check.H = 640, 480
     print("| scene | polygons | tool | redraw s (median of %d) | SVG KB | SVG s | wrong pixels | pixels tested |" % draws)

@@ -32,7 +32,7 @@ except ImportError as error:  # pragma: no cover - import error is the message
 
 from . import _hsr
 
-__all__ = ["Poly3DCollection", "plot_surface", "plot_trisurf"]
+__all__ = ["Poly3DCollection", "plot_surface", "plot_trisurf", "shade_colors"]
 
 ALGORITHMS = ("bsp", "newell")
 
@@ -273,19 +273,18 @@ def _colors(ax, verts, color, cmap, norm, vmin, vmax, shade, lightsource, zvalue
         norm.autoscale_None(zvalues)
         return mcolors.to_rgba_array(_colormap(cmap)(norm(zvalues)))
     color = color if color is not None else ax._get_lines.get_next_color()
-    return _shaded(ax, verts, np.repeat(mcolors.to_rgba_array(color), len(verts), axis=0), shade, lightsource)
+    colors = np.repeat(mcolors.to_rgba_array(color), len(verts), axis=0)
+    return shade_colors(ax, verts, colors, lightsource) if shade else colors
 
 
-def _shaded(ax, verts, colors, shade, lightsource):
-    """mplot3d's shading of per-polygon colours by the polygons' normals (when shade)."""
-    if not shade:
-        return colors
+def shade_colors(ax, verts, colors, lightsource=None):
+    """Per-polygon colours (N, 4) shaded by the polygons' normals as mplot3d shades its surfaces
+    (``shade=True``; its default light unless ``lightsource``)."""
+    colors = mcolors.to_rgba_array(colors)
+    # matplotlib 3.6 has them on the axes, later versions in art3d.
     generate = getattr(art3d, "_generate_normals", None) or ax._generate_normals
-    shade_colors = getattr(art3d, "_shade_colors", None)
-    normals = generate(verts)
-    if shade_colors is not None:
-        return shade_colors(colors, normals, lightsource)
-    return ax._shade_colors(colors, normals, lightsource)
+    shade = getattr(art3d, "_shade_colors", None) or ax._shade_colors
+    return shade(colors, generate(verts), lightsource)
 
 
 def _colormap(cmap):
@@ -326,7 +325,7 @@ def plot_surface(ax, X, Y, Z, *, color=None, cmap=None, facecolors=None, norm=No
     keep = np.isfinite(quads).all(axis=(1, 2))  # cells with a NaN are left out (masked data)
     if facecolors is not None:
         cells = mcolors.to_rgba_array(np.asarray(facecolors)[np.ix_(rows[:-1], cols[:-1])].reshape(-1, np.shape(facecolors)[-1]))
-        colors = _shaded(ax, quads, cells, shade, lightsource)
+        colors = shade_colors(ax, quads, cells, lightsource) if shade else cells
     else:
         colors = _colors(ax, quads, color, cmap, norm, vmin, vmax, shade, lightsource, quads[:, :, 2].mean(axis=1))
     quads, colors = quads[keep], colors[keep]

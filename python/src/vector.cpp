@@ -51,14 +51,9 @@ py::dict screenPolygonsToArrays(const SceneData& scene, const PyCamera& pyCamera
     repaint.mutable_data()[i] = s.repaint;
     std::memcpy(color + 4 * i, &s.color, 4);
   }
-  py::dict out;
-  out["points"] = points;
-  out["offsets"] = offsets;
-  out["face_id"] = faces;
-  out["color"] = colors;
-  out["group"] = groups;
-  out["repaint"] = repaint;
-  return out;
+  using namespace pybind11::literals;
+  return py::dict("points"_a = points, "offsets"_a = offsets, "face_id"_a = faces, "color"_a = colors,
+                  "group"_a = groups, "repaint"_a = repaint);
 }
 
 }  // namespace

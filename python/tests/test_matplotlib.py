@@ -45,9 +45,10 @@ def decode(rgb, n):
     return np.where((rgb <= 2).all(axis=-1), -1, np.where(close, face, -2))
 
 
-def figure(polys, view, make):
-    """A bare 3-D axes filling a W x H figure on black, the polygons added by make(ax, verts, colors)."""
-    fig = plt.figure(figsize=(W / 100, H / 100), dpi=100, facecolor="black")
+def figure(polys, view, make, colors=None, background="black"):
+    """A bare 3-D axes filling a W x H figure, the polygons added by make(ax, verts, colors)
+    (colors: the palette unless given; make may shade them)."""
+    fig = plt.figure(figsize=(W / 100, H / 100), dpi=100, facecolor=background)
     ax = fig.add_axes([0, 0, 1, 1], projection="3d")
     ax.set_axis_off()
     ax.patch.set_visible(False)
@@ -58,7 +59,7 @@ def figure(polys, view, make):
     ax.set_zlim(lo[2], hi[2])
     ax.set_box_aspect(hi - lo)
     ax.view_init(*view)
-    col = make(ax, [np.asarray(p, float) for p in polys], palette(len(polys)) / 255.0)
+    col = make(ax, [np.asarray(p, float) for p in polys], palette(len(polys)) / 255.0 if colors is None else colors)
     return fig, ax, col
 
 

@@ -145,21 +145,20 @@ bool separatedByEdgeOf(const dvec2* a, uint32_t na, const dvec2* b, uint32_t nb)
   constexpr double kTouch = 1e-6;
   for (uint32_t i = 0; i < na; ++i) {
     const dvec2 e = a[(i + 1) % na] - a[i];
-    const dvec2 normal(-e.y, e.x);
-    const double length = glm::length(normal);
-    if (length == 0) continue;
+    const dvec2 normal(-e.y, e.x);  // projections scaled by |e|: so is the tolerance
     double loA = INFINITY, hiA = -INFINITY, loB = INFINITY, hiB = -INFINITY;
     for (uint32_t k = 0; k < na; ++k) {
-      const double d = glm::dot(a[k], normal) / length;
+      const double d = glm::dot(a[k], normal);
       loA = std::min(loA, d);
       hiA = std::max(hiA, d);
     }
     for (uint32_t k = 0; k < nb; ++k) {
-      const double d = glm::dot(b[k], normal) / length;
+      const double d = glm::dot(b[k], normal);
       loB = std::min(loB, d);
       hiB = std::max(hiB, d);
     }
-    if (hiA <= loB + kTouch || hiB <= loA + kTouch) return true;
+    const double touch = kTouch * glm::length(e);
+    if (touch > 0 && (hiA <= loB + touch || hiB <= loA + touch)) return true;
   }
   return false;
 }
@@ -276,40 +275,57 @@ void groupPieces(const std::vector<Piece>& pieces, const std::vector<dvec2>& poi
   }
 
   // Repaints: a group of an opaque face that has earlier groups paints again, in its shape, the
-  // parts of those groups' pieces near its own that are still on top (each piece less the pieces
-  // painted over it since), so that where the face's groups meet the later shape holds both sides
-  // and shows no seam. A non-convex piece, or one under a non-convex piece, is not repainted.
+  // parts of those groups' pieces within a pixel of its box that are still on top (each piece less the pieces painted over it since), so that where the face's groups meet
+  // the later shape holds both sides and shows no seam. A non-convex piece, one under a
+  // non-convex piece, or one cut into too many parts is not repainted.
   std::vector<uint32_t> groupOf(n);
   for (uint32_t g = 0; g < groups.size(); ++g)
     for (uint32_t i : groups[g]) groupOf[i] = g;
   std::vector<std::vector<uint32_t>> groupsOf(faceCount);
   for (uint32_t g = 0; g < groups.size(); ++g) groupsOf[pieces[groups[g][0]].face].push_back(g);
-  auto near = [&](const Piece& a, const Piece& b) {
-    return a.lo.x <= b.hi.x + 1 && b.lo.x <= a.hi.x + 1 && a.lo.y <= b.hi.y + 1 && b.lo.y <= a.hi.y + 1;
+  auto boxesMeet = [](dvec2 lo, dvec2 hi, const Piece& b) {
+    return lo.x <= b.hi.x && b.lo.x <= hi.x && lo.y <= b.hi.y && b.lo.y <= hi.y;
   };
+  constexpr size_t kMostParts = 64;  // a piece cut into more is not repainted (bounds the work)
   std::vector<std::vector<std::vector<dvec2>>> repaints(groups.size());
   std::vector<std::vector<dvec2>> parts, cut;
+  std::vector<dvec2> scratch;
   for (const std::vector<uint32_t>& of : groupsOf) {
     if (of.size() < 2 || pieces[groups[of[0]][0]].color.a != 255) continue;
-    for (size_t k = 1; k < of.size(); ++k)
+    for (size_t k = 1; k < of.size(); ++k) {
+      // The parts of earlier pieces within a pixel of this group's box: where a seam could be.
+      dvec2 lo = pieces[groups[of[k]][0]].lo, hi = pieces[groups[of[k]][0]].hi;
+      for (uint32_t i : groups[of[k]]) {
+        lo = glm::min(lo, pieces[i].lo);
+        hi = glm::max(hi, pieces[i].hi);
+      }
+      lo -= 1.0;
+      hi += 1.0;
       for (size_t j = 0; j < k; ++j)
         for (uint32_t m : groups[of[j]]) {
           const Piece& piece = pieces[m];
-          if (!piece.convex || std::none_of(groups[of[k]].begin(), groups[of[k]].end(),
-                                            [&](uint32_t i) { return near(pieces[i], piece); }))
+          if (!piece.convex || !boxesMeet(lo, hi, piece) ||
+              std::none_of(groups[of[k]].begin(), groups[of[k]].end(),
+                           [&](uint32_t i) { return boxesMeet(pieces[i].lo - 1.0, pieces[i].hi + 1.0, piece); }))
             continue;
           parts.assign(1, std::vector<dvec2>(&points[piece.first], &points[piece.first] + piece.count));
+          clipHalfPlane(parts[0], scratch, {1, 0}, lo.x);
+          clipHalfPlane(parts[0], scratch, {-1, 0}, -hi.x);
+          clipHalfPlane(parts[0], scratch, {0, 1}, lo.y);
+          clipHalfPlane(parts[0], scratch, {0, -1}, -hi.y);
+          if (parts[0].size() < 3) continue;
           bool ok = true;
           for (uint32_t e = start[m]; e < start[m + 1] && ok && !parts.empty(); ++e) {
             const Piece& over = pieces[successors[e]];
-            if (groupOf[successors[e]] >= of[k]) continue;
-            ok = over.convex;
+            if (groupOf[successors[e]] >= of[k] || !boxesMeet(lo, hi, over)) continue;
+            ok = over.convex && parts.size() <= kMostParts;
             cut.clear();
             for (const std::vector<dvec2>& part : parts) subtractConvex(part, &points[over.first], over.count, cut);
             parts.swap(cut);
           }
           if (ok) repaints[of[k]].insert(repaints[of[k]].end(), parts.begin(), parts.end());
         }
+    }
   }
 
   out.groups = uint32_t(groups.size());
