@@ -309,8 +309,10 @@ def main():
           "importing matplotlib (median of 3)." % matplotlib_start_s())
     # The picture: matplotlib's and hsr's SVG of the first scene, side by side.
     first = SCENES[0][0]
+    # faceid colours of a few faces are nearly black: stretched to full brightness to be seen.
     a = matplotlib.image.imread(os.path.join(out, first + ".matplotlib.png"))[:, :, :3]
     b = matplotlib.image.imread(os.path.join(out, first + ".hsr.png"))[:, :, :3]
+    a, b = a / max(a.max(), 1e-9), b / max(b.max(), 1e-9)
     gap = np.ones((a.shape[0], 8, 3), a.dtype)
     matplotlib.image.imsave(os.path.join(out, "side-by-side.png"), np.concatenate([a, gap, b], axis=1))
 
