@@ -36,9 +36,8 @@ __all__ = ["Poly3DCollection", "plot_surface", "plot_trisurf", "shade_colors"]
 
 ALGORITHMS = ("bsp", "newell")
 
-# The virtual image hsr's camera sees: the projected polygons' (x, y) box scaled into it. Its size
-# only bounds the clipping rectangle (everything lies inside); coordinates stay doubles.
-_SIDE = 4096
+# The largest image side hsr's cameras take.
+_MAX_SIDE = 16384
 
 
 def _check_algorithm(algorithm):
@@ -47,35 +46,30 @@ def _check_algorithm(algorithm):
     return algorithm
 
 
-def projected_scene(points, lengths, colors=None):
-    """The hsr scene of polygons given in projected space and the camera that looks at them.
+def projected_scene(points, lengths, width, height, colors=None):
+    """The hsr scene of polygons given in image pixels and depth, and the camera that sees them.
 
-    points: (P, 3) float, the polygons' vertices one polygon after the other, (x, y, depth) with
-    larger depth farther (matplotlib's projected coordinates); lengths: (N,) vertex counts;
-    colors: (N, 4) RGBA floats 0-1 or None. Polygons with a non-finite vertex or fewer than three
-    vertices are left out. Returns (scene, camera, polygon_of_face, to_xy): polygon_of_face maps
-    hsr face ids to polygon indices, and to_xy maps the camera's pixel coordinates (K, 2) back to
-    projected (x, y). None when no polygon is left.
+    points: (P, 3) float, the polygons' vertices one polygon after the other, as (x right, y down)
+    pixels of a width x height image and a depth, larger farther (any affine function of
+    matplotlib's projected depth); lengths: (N,) vertex counts; colors: (N, 4) RGBA floats 0-1 or
+    None. Polygons with a non-finite vertex or fewer than three vertices are left out. The camera
+    is orthographic down the depth axis, its pixels those of the points. Returns (scene, camera,
+    polygon_of_face), polygon_of_face mapping hsr face ids to polygon indices; None when no
+    polygon is left.
     """
     points = np.asarray(points, np.float64)
     lengths = np.asarray(lengths, np.int64)
     starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+    if not len(lengths):
+        return None
     finite = np.isfinite(points).all(axis=1)
-    ok_poly = np.add.reduceat(~finite, starts) == 0 if len(lengths) else np.zeros(0, bool)
-    ok_poly &= lengths >= 3
+    ok_poly = (np.add.reduceat(~finite, starts) == 0) & (lengths >= 3)
     if not ok_poly.any():
         return None
-    used = points[np.repeat(ok_poly, lengths)]
-    lo, hi = used.min(axis=0), used.max(axis=0)
-    centre = 0.5 * (lo + hi)
-    extent = max(hi[0] - lo[0], hi[1] - lo[1], 1e-300)
-    scale = 0.9 * _SIDE / extent  # (x, y) into the virtual image, with a margin
-    depth = max(hi[2] - lo[2], 1e-300)
-    world = np.empty_like(points)
-    world[:, 0] = (points[:, 0] - centre[0]) * scale
-    world[:, 1] = (points[:, 1] - centre[1]) * scale
-    world[:, 2] = (points[:, 2] - centre[2]) * (_SIDE / depth)  # an affine map: planes stay planes
-
+    used = points[np.repeat(ok_poly, lengths), 2]
+    lo, hi = used.min(), used.max()
+    world = points.copy()
+    world[:, 2] = (points[:, 2] - lo) / max(hi - lo, 1e-300) * 2.0 - 1.0  # depth into [-1, 1]: affine
     vertices, faces, face_colors, polygon_of_face = [], [], [], []
     for k in np.unique(lengths[ok_poly]):
         chosen = np.flatnonzero(ok_poly & (lengths == k))
@@ -85,20 +79,10 @@ def projected_scene(points, lengths, colors=None):
         face_colors.append(np.ones((len(chosen), 4)) if colors is None else np.clip(colors[chosen], 0, 1))
         polygon_of_face.append(chosen)
     scene = _hsr.Scene.from_arrays(vertices, faces, colors=face_colors)
-    # Looking down +depth (up = -y, so image x = world x and image y = world y + offset).
-    eye = (0.0, 0.0, -2.0 * _SIDE)
-    camera = _hsr.Camera.orthographic(eye, (0.0, 0.0, 0.0), _SIDE, _SIDE, _SIDE, up=(0.0, -1.0, 0.0),
-                                      near=0.5 * _SIDE, far=3.5 * _SIDE)
-    resolved = camera.resolve(scene)
-    m = np.asarray(resolved["pixel_from_camera"]) @ np.asarray(resolved["camera_from_world"])
-    a, t = m[:2, :2], m[:2, 3]  # orthographic along depth: pixel = a (x, y) + t
-    inverse = np.linalg.inv(a)
-
-    def to_xy(pixels):
-        w = (np.asarray(pixels) - t) @ inverse.T
-        return np.column_stack([w[:, 0] / scale + centre[0], w[:, 1] / scale + centre[1]])
-
-    return scene, camera, np.concatenate(polygon_of_face), to_xy
+    # Looking down +depth with up = -y: world (x, y) is pixel (x, y) (the tests check it).
+    camera = _hsr.Camera.orthographic((width / 2, height / 2, -4.0), (width / 2, height / 2, 0.0), height, width,
+                                      height, up=(0.0, -1.0, 0.0), near=1.0, far=8.0)
+    return scene, camera, np.concatenate(polygon_of_face)
 
 
 def _on_boundary(piece, outline, tolerance):
@@ -194,14 +178,23 @@ class Poly3DCollection(art3d.Poly3DCollection):
     def _painted(self, points, lengths, faces, edges):
         """The 2-D paths in painting order: per paint group one compound path of its pieces
         (filled), followed, when edges show, by a path of the group's pieces' outline edges."""
-        found = projected_scene(points, lengths, faces)
+        # In the pixels of the image being drawn (the canvas at the renderer's dpi), so that hsr's
+        # paint groups and repaints work at the scale of the anti-aliasing.
+        to_display = self.axes.transData
+        width = int(min(max(np.ceil(self.figure.bbox.width), 1), _MAX_SIDE))
+        height = int(min(max(np.ceil(self.figure.bbox.height), 1), _MAX_SIDE))
+        pixels = to_display.transform(points[:, :2])
+        pixels[:, 1] = height - pixels[:, 1]
+        found = projected_scene(np.column_stack([pixels, points[:, 2]]), lengths, width, height, faces)
         if found is None:
             return [], np.zeros((0, 4)), np.zeros((0, 4))
-        scene, camera, polygon_of_face, to_xy = found
+        scene, camera, polygon_of_face = found
         painted = _hsr.screen_polygons(scene, camera, algorithm=self._algorithm, params=self._params, shading="flat")
         offsets, group = painted["offsets"], painted["group"]
         polygon = polygon_of_face[painted["face_id"]]
-        xy = to_xy(painted["points"])
+        drawn = painted["points"].copy()
+        drawn[:, 1] = height - drawn[:, 1]
+        xy = to_display.inverted().transform(drawn)
         count = np.diff(offsets)
         # Each piece's vertices, then one more (ignored) for CLOSEPOLY.
         n = len(count)

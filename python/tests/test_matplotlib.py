@@ -97,24 +97,12 @@ def reference(ax, polys, samples=4):
     pts = np.array([v for p in polys for v in p], float)
     x, y, z = proj3d.proj_transform(pts[:, 0], pts[:, 1], pts[:, 2], ax.get_proj())
     disp = ax.transData.transform(np.column_stack([x, y]))
-    lengths = [len(p) for p in polys]
-    depth = (z - z.min()) / max(np.ptp(z), 1e-300) * 2.0 - 1.0  # an affine map of matplotlib's depth
-    # The camera's pixels are the figure's pixels times `samples`: world point (x, y) is pixel (x, y).
-    world = np.column_stack([disp[:, 0], H - disp[:, 1], depth]) * [samples, samples, 1]
-    w, h = W * samples, H * samples
-    camera = hsr.Camera.orthographic((w / 2, h / 2, -4.0), (w / 2, h / 2, 0.0), h, w, h, up=(0.0, -1.0, 0.0),
-                                     near=1.0, far=8.0)
-    vertices, faces, order, start = [], [], [], np.concatenate([[0], np.cumsum(lengths)[:-1]])
-    for k in sorted(set(lengths)):
-        chosen = [i for i, n in enumerate(lengths) if n == k]
-        idx = (start[chosen][:, None] + np.arange(k)).ravel()
-        vertices.append(world[idx])
-        faces.append(np.arange(len(idx)).reshape(-1, k))
-        order += chosen
-    scene = hsr.Scene.from_arrays(vertices, faces)
+    # The figure's pixels times `samples`, y down, and matplotlib's depth.
+    points = np.column_stack([disp[:, 0] * samples, (H - disp[:, 1]) * samples, z])
+    scene, camera, order = hmpl.projected_scene(points, [len(p) for p in polys], W * samples, H * samples)
     r = camera.resolve(scene)
     m = np.asarray(r["pixel_from_camera"]) @ np.asarray(r["camera_from_world"])
-    assert np.allclose(m[:2, :2], np.eye(2)) and np.allclose(m[:2, 3], 0), m
+    assert np.allclose(m[:2, :2], np.eye(2)) and np.allclose(m[:2, 3], 0), m  # world (x, y) is pixel (x, y)
     fine = hsr.render(scene, camera, outputs=("face_id",), algorithm="raycast")["face_id"]
     fine = np.where(fine >= 0, np.asarray(order)[np.maximum(fine, 0)], -1).reshape(H, samples, W, samples)
     ids = fine[:, samples // 2, :, samples // 2]  # the sample at each pixel's centre

@@ -214,7 +214,7 @@ void groupPieces(const std::vector<Piece>& pieces, const std::vector<dvec2>& poi
         for (uint32_t j : here)
           if (seen[j] != i) {
             seen[j] = i;
-            if (pieces[j].face != p.face && mayOverlap(pieces[j], p, points)) edges.emplace_back(j, i);
+            if (mayOverlap(pieces[j], p, points)) edges.emplace_back(j, i);
           }
         here.push_back(i);
       }
@@ -264,7 +264,7 @@ void groupPieces(const std::vector<Piece>& pieces, const std::vector<dvec2>& poi
     const uint32_t face = pieces[head].face;
     members.clear();
     members.swap(ready[face]);
-    // Pieces of one face never overlap, so none of these waits for another: one group.
+    // None of these waits for another (they are all ready), so none overlaps another: one group.
     std::sort(members.begin(), members.end());
     for (uint32_t i : members) painted[i] = true;
     remaining[face] -= uint32_t(members.size());
@@ -275,9 +275,10 @@ void groupPieces(const std::vector<Piece>& pieces, const std::vector<dvec2>& poi
   }
 
   // Repaints: a group of an opaque face that has earlier groups paints again, in its shape, the
-  // parts of those groups' pieces within a pixel of its box that are still on top (each piece less the pieces painted over it since), so that where the face's groups meet
-  // the later shape holds both sides and shows no seam. A non-convex piece, one under a
-  // non-convex piece, or one cut into too many parts is not repainted.
+  // parts of those groups' pieces within a pixel of its box that are still on top (each piece
+  // less the pieces painted over it since), so that where the face's groups meet the later shape
+  // holds both sides and shows no seam. A non-convex piece, one under a non-convex piece, or one
+  // cut into too many parts is not repainted.
   std::vector<uint32_t> groupOf(n);
   for (uint32_t g = 0; g < groups.size(); ++g)
     for (uint32_t i : groups[g]) groupOf[i] = g;
