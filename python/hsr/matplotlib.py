@@ -32,7 +32,7 @@ except ImportError as error:  # pragma: no cover - import error is the message
 
 from . import _hsr
 
-__all__ = ["Poly3DCollection", "plot_surface", "plot_trisurf", "shade_colors"]
+__all__ = ["Poly3DCollection", "plot_surface", "plot_trisurf", "shade_colors", "projected_scene"]
 
 ALGORITHMS = ("bsp", "newell")
 
@@ -223,20 +223,19 @@ class Poly3DCollection(art3d.Poly3DCollection):
             face2d.append(faces[p])
             edge2d.append(none if draw_edges else edges[p])
             if draw_edges:
-                paths.append(self._outline_path(xy, offsets, painted["underlay"], group_start[g], ends_of_group[g],
+                paths.append(self._outline_path(xy, offsets, group_start[g], ends_of_group[g],
                                                 points[starts[p]:starts[p] + lengths[p], :2]))
                 face2d.append(none)
                 edge2d.append(edges[p])
         return paths, face2d, edge2d
 
     @staticmethod
-    def _outline_path(xy, offsets, underlay, first, last, outline):
-        """The edges of pieces first..last-1 (not underlays) that lie on the polygon's outline."""
+    def _outline_path(xy, offsets, first, last, outline):
+        """The edges of pieces first..last-1 that lie on the polygon's outline (a repaint's too:
+        its fill covers the stroke drawn with its piece)."""
         tolerance = 1e-9 * max(np.ptp(outline[:, 0]), np.ptp(outline[:, 1]), 1e-300)
         vertices, codes = [], []
         for i in range(first, last):
-            if underlay[i]:
-                continue
             piece = xy[offsets[i]:offsets[i + 1]]
             on = _on_boundary(piece, outline, tolerance)
             for k in np.flatnonzero(on):

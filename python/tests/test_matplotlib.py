@@ -212,3 +212,34 @@ def test_screen_polygons_arrays():
         hsr.screen_polygons(scene, camera, algorithm="zbuffer")
     with pytest.raises(ValueError, match="shading"):
         hsr.screen_polygons(scene, camera, shading="pretty")
+
+
+def test_edges_follow_the_polygons_outlines_not_the_splits():
+    polys = SCENES["intersecting-planes"]()
+    fig, ax, _ = figure(polys, VIEWS[0], lambda ax, v, c: ax.add_collection3d(
+        hmpl.Poly3DCollection(v, facecolors=c, edgecolors="white", linewidths=1.0)))
+    fig.canvas.draw()
+    col = ax.collections[0]
+    # Fill paths (no edge) and edge paths (no fill) alternate. Every stroked segment lies on a
+    # polygon's outline (none on a split), and together they cover the outlines (a repainted
+    # part's edge may be stroked twice).
+    edges = [p for p, f in zip(col.get_paths(), col.get_facecolor()) if f[3] == 0]
+    assert len(edges) == len(col.get_paths()) // 2
+    pts = np.array([v for p in polys for v in p], float)
+    x, y, _ = proj3d.proj_transform(pts[:, 0], pts[:, 1], pts[:, 2], ax.get_proj())
+    corners = np.split(np.c_[x, y], 3)
+    starts = np.concatenate(corners)
+    directions = np.concatenate([np.roll(q, -1, axis=0) - q for q in corners])
+
+    def off_outline(p):  # (K,) distance of points from the nearest outline edge's line
+        d = p[:, None, :] - starts[None]
+        cross = np.abs(d[..., 0] * directions[None, :, 1] - d[..., 1] * directions[None, :, 0])
+        return cross / np.hypot(directions[:, 0], directions[:, 1])[None]
+
+    for p in edges:
+        a, b = p.vertices[0::2], p.vertices[1::2]
+        assert (np.maximum(off_outline(a), off_outline(b)).min(axis=1) < 1e-9).all()
+    drawn = sum(np.hypot(*(p.vertices[1::2] - p.vertices[0::2]).T).sum() for p in edges)
+    outline = np.hypot(directions[:, 0], directions[:, 1]).sum()
+    assert outline * (1 - 1e-9) <= drawn < outline * 1.05
+    plt.close(fig)
