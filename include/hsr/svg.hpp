@@ -1,7 +1,8 @@
 // Exact vector output: the painting order of a list-priority algorithm (painter, newell, bsp) as
-// SVG polygons, back to front, projected to the pixels of the camera's image. With newell or bsp
-// the order is exact, so an SVG renderer's picture is the raster image (away from anti-aliased
-// edges). Used by `hsr render --svg` (docs/vector-output.md).
+// polygons on the camera's image, back to front, the pieces of a face in paint groups drawn as
+// one shape (no anti-aliasing seam), as data (screenPolygons) or SVG. With newell or bsp the order
+// is exact, so an SVG renderer's picture is the raster image (away from anti-aliased edges). Used
+// by `hsr render --svg` (docs/vector-output.md) and hsr.matplotlib (docs/matplotlib.md).
 #pragma once
 #include <hsr/camera.hpp>
 #include <hsr/frame.hpp>
