@@ -20,17 +20,24 @@ import time
 
 import numpy as np
 
-try:
-    import matplotlib
+# matplotlib is imported by main() (the scenes below need NumPy only: python/tests and
+# bench/mpl_redraw.py import them).
+matplotlib = plt = proj3d = Poly3DCollection = None
 
-    matplotlib.use("svg")
-    import matplotlib.image
-    import matplotlib.pyplot as plt
-    from mpl_toolkits.mplot3d import proj3d
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
-except ImportError:
-    print("vector_peer: matplotlib not installed (Debian: python3-matplotlib); skipped", file=sys.stderr)
-    sys.exit(0)
+
+def import_matplotlib():
+    global matplotlib, plt, proj3d, Poly3DCollection
+    try:
+        import matplotlib
+
+        matplotlib.use("svg")
+        import matplotlib.image
+        import matplotlib.pyplot as plt
+        from mpl_toolkits.mplot3d import proj3d
+        from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    except ImportError:
+        print("vector_peer: matplotlib not installed (Debian: python3-matplotlib); skipped", file=sys.stderr)
+        sys.exit(0)
 
 
 # --- Scenes: polygons (lists of 3D points), written as OBJ so both tools read the same faces. ---
@@ -88,8 +95,33 @@ def random_polygons(n=40, seed=4):
     return polys
 
 
+def intersecting_planes():
+    """Three mutually perpendicular squares through one point: each passes through the others."""
+    polys = []
+    for axis in range(3):
+        u, v = [np.eye(3)[(axis + 1) % 3], np.eye(3)[(axis + 2) % 3]]
+        polys.append([s * u + t * v for s, t in ((-1, -1), (1, -1), (1, 1), (-1, 1))])
+    return polys
+
+
+def interlocking_tori(n=16, m=8):
+    """Two tori linked like chain links, as triangles (two per planar-split quad of each)."""
+    polys = []
+    for shift, rotate in ((np.array([-0.5, 0, 0]), False), (np.array([0.5, 0, 0]), True)):
+        def point(i, j):
+            a, b = 2 * math.pi * i / n, 2 * math.pi * j / m
+            p = np.array([(0.9 + 0.3 * math.cos(b)) * math.cos(a), (0.9 + 0.3 * math.cos(b)) * math.sin(a), 0.3 * math.sin(b)])
+            return shift + (np.array([p[0], p[2], p[1]]) if rotate else p)
+        for i in range(n):
+            for j in range(m):
+                a, b, c, d = point(i, j), point(i + 1, j), point(i + 1, j + 1), point(i, j + 1)
+                polys += [[a, b, c], [a, c, d]]
+    return polys
+
+
 SCENES = [("cycle", cycle_bars), ("surfaces", surfaces), ("random-triangles", random_triangles),
-          ("random-polygons", random_polygons)]
+          ("random-polygons", random_polygons), ("intersecting-planes", intersecting_planes),
+          ("interlocking-tori", interlocking_tori)]
 
 
 def write_obj(polys, path):
@@ -133,10 +165,9 @@ def project(cam, v):
 
 
 def face_id_color(face):
-    """hsr's faceid colour (src/scene/shading.cpp, faceIdColor)."""
-    h = ((face + 1) * 2654435761) & 0xFFFFFFFF
-    h ^= h >> 15
-    return (64 + (h & 0xBF), 64 + ((h >> 8) & 0xBF), 64 + ((h >> 16) & 0xBF))
+    """hsr's faceid colour (docs/conventions.md): face index + 1 as 24-bit RGB, R the high byte."""
+    v = face + 1
+    return (v >> 16) & 255, (v >> 8) & 255, v & 255
 
 
 # --- matplotlib: the camera's projection done here, matplotlib's 3D axes looking straight down the
@@ -200,8 +231,11 @@ def edge_mask(polygons2d, w, h):
 def svg_polygons(path):
     text = open(path).read()
     out = []
-    for m in re.finditer(r'<polygon points="([^"]*)"', text):
-        out.append([tuple(map(float, pair.split(","))) for pair in m.group(1).split()])
+    # <polygon points="x,y ..."> and <path d="Mx,y ...ZMx,y ...Z"> (one polygon per subpath).
+    for m in re.finditer(r'<(?:polygon points|path d)="([^"]*)"', text):
+        for ring in m.group(1).replace("M", " ").split("Z"):
+            if ring.strip():
+                out.append([tuple(map(float, pair.split(","))) for pair in ring.split()])
     return out
 
 
@@ -263,6 +297,7 @@ def main():
     if len(sys.argv) < 3:
         sys.exit(__doc__)
     hsr, out = sys.argv[1], sys.argv[2]
+    import_matplotlib()
     w, h = (int(sys.argv[3]), int(sys.argv[4])) if len(sys.argv) > 4 else (640, 480)
     os.makedirs(out, exist_ok=True)
     print("| scene | polygons | tool | SVG s | wall s | file KB | wrong pixels | pixels tested |")
@@ -274,8 +309,10 @@ def main():
           "importing matplotlib (median of 3)." % matplotlib_start_s())
     # The picture: matplotlib's and hsr's SVG of the first scene, side by side.
     first = SCENES[0][0]
+    # faceid colours of a few faces are nearly black: stretched to full brightness to be seen.
     a = matplotlib.image.imread(os.path.join(out, first + ".matplotlib.png"))[:, :, :3]
     b = matplotlib.image.imread(os.path.join(out, first + ".hsr.png"))[:, :, :3]
+    a, b = a / max(a.max(), 1e-9), b / max(b.max(), 1e-9)
     gap = np.ones((a.shape[0], 8, 3), a.dtype)
     matplotlib.image.imsave(os.path.join(out, "side-by-side.png"), np.concatenate([a, gap, b], axis=1))
 

@@ -90,4 +90,7 @@ PyCamera lookAtCamera(py::handle eye, py::handle target, int width, int height, 
                       py::handle orthoHeight, py::handle near, py::handle far);
 void checkImageSize(int width, int height);
 
+/// hsr.screen_polygons (vector.cpp).
+void bindVector(py::module_& m);
+
 }  // namespace hsrpy

@@ -291,6 +291,7 @@ PYBIND11_MODULE(_hsr, m) {
   });
   bindScene(m);
   bindCamera(m);
+  bindVector(m);
   m.def(
       "load", [](const std::string& path) { return makeSceneData(loadSceneOrRaise(path)); }, py::arg("path"),
       R"(Loads a scene as `hsr render` does: OBJ, PLY, STL, OFF, glTF/GLB and other assimp formats, a scene

@@ -7,10 +7,9 @@
 namespace hsr {
 
 Rgba8 faceIdColor(uint32_t face) {
-  // A multiplicative hash spreads neighbouring ids over the colour cube; keep it bright.
-  uint32_t h = (face + 1) * 2654435761u;
-  h ^= h >> 15;
-  return Rgba8{uint8_t(64 + (h & 0xBF)), uint8_t(64 + ((h >> 8) & 0xBF)), uint8_t(64 + ((h >> 16) & 0xBF)), 255};
+  // docs/conventions.md: face index + 1 as a 24-bit integer, R the high byte, B the low byte.
+  const uint32_t v = face + 1;
+  return Rgba8{uint8_t(v >> 16), uint8_t(v >> 8), uint8_t(v), 255};
 }
 
 TriangleShader::TriangleShader(const Scene& scene, const Camera& camera, Shading shading)

@@ -1,5 +1,5 @@
 // Per-triangle flat shading shared by all algorithms, so every algorithm's colour image agrees:
-// face colour, a two-sided headlight Lambert shade, or a distinct colour per face id.
+// face colour, a two-sided headlight Lambert shade, or the face id as a colour.
 #pragma once
 #include <hsr/camera.hpp>
 #include <hsr/options.hpp>
@@ -9,7 +9,8 @@
 
 namespace hsr {
 
-/// A distinct, deterministic colour for face `face` (used by Shading::FaceId).
+/// The colour Shading::FaceId gives face `face`: face + 1 as 24-bit RGB (R the high byte, B the low
+/// byte; 0,0,0 is left for the background), as the face-id PNG; ids from 2^24 - 1 on wrap around.
 Rgba8 faceIdColor(uint32_t face);
 
 /// `base` scaled by the Lambert factor k (0.25 + 0.75 |cos|), alpha kept.
