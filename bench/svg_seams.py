@@ -57,10 +57,11 @@ def interior(fine, samples):
 
 def rasterize(renderer, svg, png, w, h):
     if renderer == "librsvg":
-        subprocess.run(["rsvg-convert", "-w", str(w), "-h", str(h), svg, "-o", png], check=True)
+        subprocess.run(["rsvg-convert", "-w", str(w), "-h", str(h), "--background-color=black", svg, "-o", png], check=True)
     else:
         subprocess.run(["chromium", "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
-                        "--force-device-scale-factor=1", "--window-size=%d,%d" % (w, h), "--screenshot=" + png,
+                        "--force-device-scale-factor=1", "--default-background-color=000000ff",
+                        "--window-size=%d,%d" % (w, h), "--screenshot=" + png,
                         os.path.abspath(svg)], check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     return read_png(png)
 

@@ -40,8 +40,8 @@ std::vector<dvec2> parsePoints(const std::string& text) {
   return points;
 }
 
-// Our SVG's polygons, read back with their exact text: every element after the background rect
-// is a <polygon points="x,y ..." fill="#rrggbb"/> or a <path d="Mx,y ...ZMx,y ...Z" fill=.../>
+// Our SVG's polygons, read back with their exact text: every element after the <svg> element (no
+// background element: the conventions' "nothing for the background") is a <polygon points="x,y ..." fill="#rrggbb"/> or a <path d="Mx,y ...ZMx,y ...Z" fill=.../>
 // (optionally with fill-opacity), a path's subpaths being polygons of one fill.
 std::vector<SvgPolygon> parsePolygons(const std::string& svg) {
   std::vector<SvgPolygon> out;
@@ -166,7 +166,8 @@ TEST_F(SvgTest, NewellsTranslucentSvgBlendsAsTheAbuffer) {
   std::ifstream in(svgPath);
   const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(svg.find("fill-opacity=\""), std::string::npos);
-  const std::string command = "rsvg-convert '" + svgPath + "' -o '" + pngPath + "'";
+  // The SVG has no background: the page under it is the raster's background, black.
+  const std::string command = "rsvg-convert --background-color=black '" + svgPath + "' -o '" + pngPath + "'";
   ASSERT_EQ(std::system(command.c_str()), 0) << command;
   int pw = 0, ph = 0, channels = 0;
   unsigned char* pixels = stbi_load(pngPath.c_str(), &pw, &ph, &channels, 3);
@@ -249,7 +250,7 @@ TEST_F(SvgTest, SplitFacesShowNoSeamsUnderAntiAliasing) {
     options.shading = Shading::FaceId;
     const std::string svgPath = path(std::string(algorithm) + ".svg"), pngPath = path(std::string(algorithm) + ".png");
     writeSvg(scene, camera, options, svgPath);
-    const std::string command = "rsvg-convert '" + svgPath + "' -o '" + pngPath + "'";
+    const std::string command = "rsvg-convert --background-color=black '" + svgPath + "' -o '" + pngPath + "'";
     ASSERT_EQ(std::system(command.c_str()), 0) << command;
     int pw = 0, ph = 0, channels = 0;
     unsigned char* pixels = stbi_load(pngPath.c_str(), &pw, &ph, &channels, 3);

@@ -55,8 +55,8 @@ struct ScreenPolygons {
 /// parameter.
 ScreenPolygons screenPolygons(const Scene& scene, const Camera& camera, const RenderOptions& options);
 
-/// The scene seen by `camera` as an SVG document of camera.width x camera.height pixels: the
-/// background, then screenPolygons(): a paint group of one polygon as a <polygon>, a larger one as
+/// The scene seen by `camera` as an SVG document of camera.width x camera.height pixels, nothing
+/// for the background (the shared conventions: the viewer's page shows through), then screenPolygons(): a paint group of one polygon as a <polygon>, a larger one as
 /// one <path> of a subpath per polygon (fill-rule nonzero: the pieces of a face have one
 /// orientation), each filled with its shaded colour, alpha below 255 as fill-opacity.
 /// Coordinates in pixels to 1/1000 (finer than the rasterizer's 1/256 snapping).

@@ -1,6 +1,7 @@
 // hsr.render: one camera or a batch, the scene set up once, the views spread over the threads
 // with the GIL released, every output handed to NumPy without a copy (buffers.hpp).
 #include "buffers.hpp"
+#include "options.hpp"
 
 #include <hsr/limits.hpp>
 
@@ -66,28 +67,6 @@ hsr::FrameOutputs frameOutputs(const Wanted& w) {
   return hsr::FrameOutputs(flags);
 }
 
-template <class Enum>
-Enum choice(const std::string& what, const std::string& value, std::initializer_list<std::pair<const char*, Enum>> names) {
-  std::string known;
-  for (const auto& [name, e] : names) {
-    if (value == name) return e;
-    known += (known.empty() ? "" : ", ") + std::string(name);
-  }
-  valueError(what + " '" + value + "': unknown (known: " + known + ")");
-}
-
-std::map<std::string, std::string> paramsOf(py::handle params) {
-  std::map<std::string, std::string> out;
-  if (params.is_none()) return out;
-  if (!py::isinstance<py::dict>(params)) valueError("params: expected a dict of name: value");
-  for (auto [key, value] : py::reinterpret_borrow<py::dict>(params)) {
-    if (!py::isinstance<py::str>(key)) valueError("params: names are strings");
-    const bool isBool = py::isinstance<py::bool_>(value);
-    out[key.cast<std::string>()] = isBool ? (value.cast<bool>() ? "on" : "off") : py::str(value).cast<std::string>();
-  }
-  return out;
-}
-
 hsr::Rgba8 backgroundOf(py::handle value) {
   std::vector<int> c;
   try {
@@ -116,9 +95,8 @@ hsr::RenderOptions optionsOf(const Wanted& wanted, const std::string& algorithm,
   hsr::resolveParams(*info, o.params);  // InputError keyed Param: pythonMessage words it
   if (!depthFormat.empty()) o.depthFormat = hsr::DepthFormat::parse(depthFormat);
   o.outputs = frameOutputs(wanted);
-  o.cull = choice<hsr::Cull>("cull", cull, {{"none", hsr::Cull::None}, {"back", hsr::Cull::Back}, {"front", hsr::Cull::Front}});
-  o.shading = choice<hsr::Shading>(
-      "shading", shading, {{"lambert", hsr::Shading::Lambert}, {"flat", hsr::Shading::Flat}, {"faceid", hsr::Shading::FaceId}});
+  o.cull = cullOf(cull);
+  o.shading = shadingOf(shading);
   o.background = backgroundOf(background);
   if (threads < 0) valueError("threads: " + std::to_string(threads) + " is negative (0: all cores)");
   o.threads = threads;

@@ -407,12 +407,7 @@ std::string renderSvg(const Scene& scene, const Camera& camera, const RenderOpti
   out.reserve(96 + painted.polygons.size() * 64);
   out += "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"";
   out += std::to_string(camera.width) + "\" height=\"" + std::to_string(camera.height) + "\" viewBox=\"0 0 " +
-         std::to_string(camera.width) + " " + std::to_string(camera.height) + "\">\n<rect width=\"" +
-         std::to_string(camera.width) + "\" height=\"" + std::to_string(camera.height) + "\" fill=\"";
-  appendColor(out, options.background);
-  out += "\"";
-  appendOpacity(out, options.background.a);
-  out += "/>\n";
+         std::to_string(camera.width) + " " + std::to_string(camera.height) + "\">\n";
 
   auto appendPoints = [&](const ScreenPolygon& p) {
     for (uint32_t k = 0; k < p.count; ++k) {
