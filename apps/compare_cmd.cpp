@@ -166,6 +166,7 @@ int runCompare(const CompareFlags& f) {
   if (f.scenes.empty() && !gInterrupted) results["zfight"] = zfightExperiment(settings, f.quick);
   if (f.scenes.empty() && !gInterrupted) results["coherence"] = coherenceExperiment(settings, f.quick);
   if (f.scenes.empty() && !gInterrupted) results["depth_compression"] = depthCompressionExperiment(settings, f.quick);
+  if (f.scenes.empty() && !gInterrupted) results["shadows"] = shadowExperiment(settings, f.quick);
   results["complete"] = !gInterrupted.load();
   writeOutputs(f.out, results);
   std::signal(SIGINT, previous);

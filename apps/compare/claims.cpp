@@ -272,6 +272,25 @@ Json compressionClaim(const Json& results) {
                !exact ? "does not hold" : smaller ? "holds" : "holds only in part (some buffers do not shrink)");
 }
 
+// KTH report: shadows as one of the z-buffer's other uses (a depth buffer from the light).
+Json shadowClaim(const Json& results) {
+  const char* text = "Shadows by the z-buffer: a point is in shadow when the light's depth buffer holds something "
+                     "nearer the light";
+  if (!results.contains("shadows")) return notMeasured(text, "KTH report", "the shadow experiment did not run");
+  std::string measured;
+  bool explained = true;
+  for (const Json& r : results["shadows"]) {
+    explained &= r["wrong_unexplained"].get<uint64_t>() == 0;
+    measured += fmt::format("{}{} {}, {} x {}: {} wrong, {} away from edges, {} unexplained",
+                            measured.empty() ? "" : "; ", r["scene"].get<std::string>(), r["size"].get<std::string>(),
+                            r["maps"].get<int>(), r["map_size"].get<int>(), r["wrong_pixels"].get<uint64_t>(),
+                            r["wrong_away_from_edges"].get<uint64_t>(), r["wrong_unexplained"].get<uint64_t>());
+  }
+  return claim(text, "KTH report", "each pixel's verdict against an exact shadow ray: " + measured,
+               explained ? "holds only at the map's resolution (every wrong pixel at a shadow, face or texel edge)"
+                         : "does not hold");
+}
+
 // The bytes of the buffers a real frame of `scene` at w x h uses for the figure: the textbook
 // z-buffer's depth buffer in `depthFormat` (if any) and the frame's colour (if asked), as its
 // statistics name them (docs/memory.md).
@@ -362,6 +381,7 @@ Json evaluateClaims(const Json& results) {
   out.push_back(zfightClaim(results));
   out.push_back(coherenceClaim(results));
   out.push_back(compressionClaim(results));
+  out.push_back(shadowClaim(results));
   memoryClaims(out);
   for (const Json& c : precisionClaims()) out.push_back(c);
   return out;

@@ -1,6 +1,6 @@
 // The study's experiments beyond scene x algorithm: z-fighting per depth format, temporal
-// coherence over an orbit, lossless depth compression, the memory of the buffers, and depth
-// precision curves (study.hpp).
+// coherence over an orbit, lossless depth compression, shadow maps, the memory of the buffers,
+// and depth precision curves (study.hpp).
 #include "study.hpp"
 
 #include "../commands.hpp"
@@ -135,6 +135,45 @@ Json depthCompressionExperiment(const StudySettings& settings, bool quick) {
                       {"raw_blocks", c.rawBlocks}, {"compress_ms", ms}, {"round_trip_exact", exact},
                       // A tiled renderer loads and stores each tile's depth once a frame: twice the buffer.
                       {"traffic_saved_bytes", 2 * (int64_t(allocated) - int64_t(c.bytes.size()))}});
+    }
+  }
+  return rows;
+}
+
+Json shadowExperiment(const StudySettings& settings, bool quick) {
+  const int w = quick ? 320 : 1920, h = quick ? 180 : 1080;
+  struct Way {
+    ShadowMethod method;
+    int cascades, mapSize;
+  };
+  const Way ways[] = {{ShadowMethod::Single, 1, 4096}, {ShadowMethod::Cascaded, 4, 2048}};
+  Json rows = Json::array();
+  for (const auto& [name, direction] : {std::pair{"builtin:city", dvec3(0.6, -1, 0.4)},
+                                        std::pair{"builtin:clutter", dvec3(-0.4, -1, 0.3)}}) {
+    const Scene scene = loadScene(name);
+    const CameraSpec spec = scene.camera ? *scene.camera : frameBounds(scene.bounds());
+    const Camera camera = resolveCamera(spec, w, h, scene.bounds(), name);
+    RenderOptions options;
+    options.threads = settings.threads;
+    options.outputs = FrameOutputs::FaceIds | FrameOutputs::TriangleIds;
+    const Frame view = render(scene, camera, options);
+    Light light;
+    light.kind = Light::Kind::Directional;
+    light.vector = direction;
+    for (const Way& way : ways) {
+      if (settings.interrupted && settings.interrupted->load()) return rows;
+      ShadowOptions shadow;
+      shadow.method = way.method;
+      shadow.cascades = way.cascades;
+      shadow.mapSize = way.mapSize;
+      shadow.threads = settings.threads;
+      Frame frame = view;
+      const auto start = std::chrono::steady_clock::now();
+      const ShadowComparison c = addShadows(scene, camera, frame, light, shadow, /*verify=*/true);
+      rows.push_back({{"scene", name}, {"size", fmt::format("{}x{}", w, h)},
+                      {"method", shadowMethodName(way.method)}, {"maps", way.cascades}, {"map_size", way.mapSize},
+                      {"wrong_pixels", c.wrong}, {"wrong_away_from_edges", c.wrongAwayFromEdges},
+                      {"wrong_unexplained", c.wrongUnexplained}, {"ms", millisecondsSince(start)}});
     }
   }
   return rows;

@@ -236,6 +236,24 @@ void writeDepthCompression(std::ostream& o, const Json& results) {
       });
 }
 
+void writeShadows(std::ostream& o, const Json& results) {
+  if (!results.contains("shadows")) return;
+  writeTableSection(
+      o, "shadows", "Shadow maps",
+      "The z-buffer from the light (<code>--shadows</code>, docs/shadows.md): one map over "
+      "the scene against four cascades fitted to what the view shows (the same texels), every visible pixel's verdict "
+      "checked against an exact shadow ray. Wrong pixels away from edges are away from shadow and face edges at the "
+      "view's pixels; unexplained ones are not at a texel edge either.",
+      {"scene", "size", "method", "maps", "map size", "wrong", "away from edges", "unexplained", "ms"},
+      results["shadows"], [](const Json& r) {
+        return std::vector<std::string>{esc(r["scene"]),          esc(r["size"]),
+                                        esc(r["method"]),         std::to_string(r["maps"].get<int>()),
+                                        std::to_string(r["map_size"].get<int>()), num(r["wrong_pixels"]),
+                                        num(r["wrong_away_from_edges"]), num(r["wrong_unexplained"]),
+                                        fmt::format("{:.0f}", r["ms"].get<double>())};
+      });
+}
+
 // Chart.js charts built from the embedded results; the page records what rendered (and any
 // error) on <body> for the browser test (tests/report_check.py).
 const char* kChartScript = R"JS(
@@ -350,6 +368,7 @@ void writeReport(const std::string& dir, const Json& results) {
   writeZfight(o, results);
   writeCoherence(o, results);
   writeDepthCompression(o, results);
+  writeShadows(o, results);
   std::string embedded = results.dump();
   for (size_t p = 0; (p = embedded.find("</", p)) != std::string::npos; p += 3) embedded.replace(p, 2, "<\\/");
   o << "<script id=\"results\" type=\"application/json\">" << embedded << "</script>\n"

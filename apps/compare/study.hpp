@@ -68,6 +68,9 @@ Json coherenceExperiment(const StudySettings& settings, bool quick);
 /// 1920x1080 in three formats: bytes against the buffer as allocated, the blocks of each kind, and
 /// the round trip checked bit for bit.
 Json depthCompressionExperiment(const StudySettings& settings, bool quick);
+/// Shadow maps (docs/shadows.md): the city and the clutter under a sun, one 4096 map against four
+/// cascades of 2048 (the same texels), each pixel's verdict checked against an exact shadow ray.
+Json shadowExperiment(const StudySettings& settings, bool quick);
 /// The buffers' bytes per depth format and image size: packed (as the documents count) and as
 /// hsr allocates them.
 Json memoryTable();
