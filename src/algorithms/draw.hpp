@@ -11,6 +11,7 @@
 #include <functional>
 #include <span>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "core/timer.hpp"
@@ -55,43 +56,45 @@ class DrawBuffers {
  public:
   /// The depth buffer of values of type T (uint16_t, uint32_t or float: DepthT).
   template <class T>
-  std::vector<T>& depth() {
-    if constexpr (std::is_same_v<T, uint16_t>) return depth16_;
-    else if constexpr (std::is_same_v<T, float>) return depthF32_;
-    else return depth32_;
-  }
+  std::vector<T>& depth() { return drawn_.depth.get<T>(); }
   /// Per pixel: 1 + the index of the winning (or last written) triangle, 0 = none.
-  std::vector<uint32_t>& winner() { return winner_; }
+  std::vector<uint32_t>& winner() { return drawn_.winner; }
 
   /// DepthPeel: the layer peeled before, its depth values and winners (empty: none yet, so the
   /// next layer is the nearest).
   template <class T>
-  std::vector<T>& peeledDepth() {
-    if constexpr (std::is_same_v<T, uint16_t>) return peeled16_;
-    else if constexpr (std::is_same_v<T, float>) return peeledF32_;
-    else return peeled32_;
-  }
-  std::vector<uint32_t>& peeledWinner() { return peeledWinner_; }
+  std::vector<T>& peeledDepth() { return peeled_.depth.get<T>(); }
+  std::vector<uint32_t>& peeledWinner() { return peeled_.winner; }
   /// The layer just drawn under DepthPeel becomes the one the next layer lies beyond.
-  void keepPeeledLayer() {
-    depth16_.swap(peeled16_);
-    depth32_.swap(peeled32_);
-    depthF32_.swap(peeledF32_);
-    winner_.swap(peeledWinner_);
-  }
+  void keepPeeledLayer() { std::swap(drawn_, peeled_); }
   /// Forgets the peeled layer: the next DepthPeel layer is the nearest.
-  void forgetPeeledLayer() {
-    peeled16_.clear();
-    peeled32_.clear();
-    peeledF32_.clear();
-    peeledWinner_.clear();
-  }
+  void forgetPeeledLayer() { peeled_.clear(); }
 
  private:
-  std::vector<uint16_t> depth16_, peeled16_;
-  std::vector<uint32_t> depth32_, peeled32_;
-  std::vector<float> depthF32_, peeledF32_;
-  std::vector<uint32_t> winner_, peeledWinner_;
+  // A depth buffer of each storage type.
+  struct DepthOfEachType {
+    std::vector<uint16_t> u16;
+    std::vector<uint32_t> u32;
+    std::vector<float> f32;
+    template <class T>
+    std::vector<T>& get() {
+      if constexpr (std::is_same_v<T, uint16_t>) return u16;
+      else if constexpr (std::is_same_v<T, float>) return f32;
+      else return u32;
+    }
+  };
+  // One layer: its depth values and its winners.
+  struct Layer {
+    DepthOfEachType depth;
+    std::vector<uint32_t> winner;
+    void clear() {  // keeping the memory, for the next frame's warm pages
+      depth.u16.clear();
+      depth.u32.clear();
+      depth.f32.clear();
+      winner.clear();
+    }
+  };
+  Layer drawn_, peeled_;
 };
 
 /// The counters of the statistics, as every algorithm counts them.
