@@ -125,6 +125,24 @@ class TiledZBuffer {
   ~TiledZBuffer();
   void draw(const Scene& scene, const Camera& camera, const RenderOptions& options, Frame& frame);
 
+  /// What drawInOrder did: the kernel's comparisons and wins, the triangle-tile pairs it skipped
+  /// whole (behind, or under firstWins after, everything the tile held), the pixels covered and
+  /// the bytes it kept.
+  struct InOrderCounts {
+    uint64_t tests = 0, wins = 0, skippedPairs = 0, covered = 0, memoryBytes = 0;
+  };
+  /// The tile pass over set-up triangles given in drawing order instead of a scene's (drawScene
+  /// with raster=tiled, draw.cpp), into the whole frame. `firstWins`: each pixel shows the first
+  /// triangle of the list that covers it (the list-priority rules: WhereUnwritten in the list's
+  /// order, Overwrite in reverse), for at most 2^24 - 2 triangles. Each triangle is then drawn at
+  /// a constant stored value, its place in the list (a priority key), so the kernel's depth test
+  /// applies the rule and a full tile or block rejects the rest at once; each pixel is resolved
+  /// from its winner's own planes, ids and colour. Otherwise: the depth test in the frame's
+  /// format, ties to the first in the list.
+  static constexpr size_t kMostFirstWins = (size_t(1) << 24) - 2;
+  InOrderCounts drawInOrder(std::span<const SetupTriangle> triangles, bool firstWins, const Camera& camera,
+                            const RenderOptions& options, const TriangleShader& shade, Frame& frame);
+
  private:
   struct State;
   std::unique_ptr<State> state_;

@@ -187,7 +187,7 @@ AlgorithmInfo bspAlgorithm() {
        "area A counted 1 + 4a/A"},
       {"max-fragments", ParamType::Int, "4000000", {}, 1, 1e9,
        "the most fragments the tree may hold: a build that would make more stops with an error"},
-      drawRasterParam("binned"),
+      drawRasterParam("binned", /*kernel=*/true),
   };
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.capability = Capability::PaintsInOrder;

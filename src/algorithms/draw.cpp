@@ -366,7 +366,56 @@ void drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawR
   }
 }
 
+// The frame's triangles through the tile kernel (DrawRaster::Tiled, TiledZBuffer::drawInOrder),
+// counted as the drawing service counts: a list-priority rule as "the first in a list wins" (the
+// drawing order under WhereUnwritten; reversed under Overwrite, whose last fragment wins), with
+// the scene's ids and colours when the triangles are derived geometry.
+void drawOnKernel(FrameWork& work, WriteRule rule, const Camera& camera, const RenderOptions& options,
+                  const TriangleShader& shade, const DerivedScene* derived, DrawBuffers& buffers, Frame& frame) {
+  std::vector<SetupTriangle>& list = work.triangles;
+  const bool depthTest = rule == WriteRule::DepthTest;
+  if (!depthTest && list.size() > TiledZBuffer::kMostFirstWins) {  // more than it has priority keys for
+    frame.clear(options.background, resolveThreads(options.threads));
+    return drawOrdered(list, rule, DrawRaster::Binned, camera, options, shade, buffers, frame, work.counters, derived);
+  }
+  if (rule == WriteRule::Overwrite) std::reverse(list.begin(), list.end());
+  const bool color = has(options.outputs, FrameOutputs::Color);
+  if (derived)
+    for (SetupTriangle& t : list) {
+      const uint32_t original = derived->triangle[t.triangle];
+      if (color) t.color = shade(original), t.frontFacing = true;  // (the resolve reads a front face's colour)
+      t.face = derived->face[t.face];
+      t.triangle = original;
+    }
+  const TiledZBuffer::InOrderCounts c =
+      buffers.tiled().drawInOrder(list, /*firstWins=*/!depthTest, camera, options, shade, frame);
+  DrawCounters& n = work.counters;
+  if (depthTest) n.depthTests = c.tests, n.depthWrites = c.wins;
+  n.written = c.wins;
+  n.colorWrites = color ? c.wins : 0;
+  n.covered = c.covered;
+  n.skippedFull = depthTest ? 0 : c.skippedPairs;
+  frame.stats.addMemory("tiled_state", c.memoryBytes);
+}
+
+// Whether DrawRaster::Tiled draws `rule` into `frame` (else the frame is drawn Binned): the
+// depth test and the list-priority rules, unless the frame counts each pixel's writes.
+bool kernelDraws(WriteRule rule, const Frame& frame) {
+  const bool rules = rule == WriteRule::DepthTest || rule == WriteRule::Overwrite || rule == WriteRule::WhereUnwritten;
+  return rules && frame.writes.empty();
+}
+
 }  // namespace
+
+DrawBuffers::DrawBuffers() = default;
+DrawBuffers::~DrawBuffers() = default;
+DrawBuffers::DrawBuffers(DrawBuffers&&) noexcept = default;
+DrawBuffers& DrawBuffers::operator=(DrawBuffers&&) noexcept = default;
+
+TiledZBuffer& DrawBuffers::tiled() {
+  if (!tiled_) tiled_ = std::make_unique<TiledZBuffer>();
+  return *tiled_;
+}
 
 SetupTriangle clippedTo(const SetupTriangle& t, int x0, int y0, int x1, int y1) {
   SetupTriangle c = t;
@@ -441,19 +490,29 @@ const char* drawRasterName(DrawRaster raster) {
     case DrawRaster::HalfSpace: return "halfspace";
     case DrawRaster::Scanline: return "scanline";
     case DrawRaster::Binned: return "binned";
+    case DrawRaster::Tiled: return "tiled";
   }
   return "?";
 }
 
-ParamSpec drawRasterParam(const char* defaultValue) {
-  return {"raster", ParamType::Choice, defaultValue, {"halfspace", "scanline", "binned"}, -1e300, 1e300,
+ParamSpec drawRasterParam(const char* defaultValue, bool kernel) {
+  if (!kernel)
+    return {"raster", ParamType::Choice, defaultValue, {"halfspace", "scanline", "binned"}, -1e300, 1e300,
+            "fragments from the scalar half-space rasterizer on one thread (the reference), the lecture notes' "
+            "scanline rasterizer, or the half-space rasterizer binned into 64x64 tiles on threads"};
+  return {"raster", ParamType::Choice, defaultValue, {"halfspace", "scanline", "binned", "tiled"}, -1e300, 1e300,
           "fragments from the scalar half-space rasterizer on one thread (the reference), the lecture notes' "
-          "scanline rasterizer, or the half-space rasterizer binned into 64x64 tiles on threads"};
+          "scanline rasterizer, the half-space rasterizer binned into 64x64 tiles on threads, or the z-buffer's "
+          "SIMD tile kernel: the same image, the first fragment in priority order winning each pixel (transparent "
+          "scenes, and frames counting each pixel's writes, draw binned)"};
 }
 
 DrawRaster drawRasterOf(const AlgorithmParams& params) {
   const std::string& name = params.text("raster");
-  return name == "scanline" ? DrawRaster::Scanline : name == "binned" ? DrawRaster::Binned : DrawRaster::HalfSpace;
+  return name == "scanline" ? DrawRaster::Scanline
+         : name == "binned"  ? DrawRaster::Binned
+         : name == "tiled"   ? DrawRaster::Tiled
+                             : DrawRaster::HalfSpace;
 }
 
 void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& options, const FrameSteps& steps,
@@ -497,10 +556,16 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
   const bool depthTested =
       rule == WriteRule::DepthTest || rule == WriteRule::DepthTestBlend || rule == WriteRule::DepthPeel;
   uint64_t skippedFull = 0;
-  drawFrame(scene, camera, options, {.order = order, .depthTested = depthTested, .derived = derived},
+  if (raster == DrawRaster::Tiled && !kernelDraws(rule, frame)) raster = DrawRaster::Binned;
+  const bool onKernel = raster == DrawRaster::Tiled;
+  drawFrame(scene, camera, options,
+            {.order = order, .depthTested = depthTested, .clearFrame = !onKernel, .derived = derived},
             [&](FrameWork& work, const TriangleShader& shade) {
-              drawOrdered(work.triangles, rule, raster, camera, options, shade, buffers, frame, work.counters,
-                          derived);
+              if (onKernel)
+                drawOnKernel(work, rule, camera, options, shade, derived, buffers, frame);
+              else
+                drawOrdered(work.triangles, rule, raster, camera, options, shade, buffers, frame, work.counters,
+                            derived);
               skippedFull = work.counters.skippedFull;
             },
             frame);

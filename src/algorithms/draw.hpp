@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <span>
 #include <type_traits>
 #include <utility>
@@ -43,17 +44,27 @@ enum class DrawRaster : uint8_t {
   HalfSpace,  // the scalar half-space rasterizer over the whole frame, on one thread (the reference)
   Scanline,   // the lecture notes' scanline rasterizer, depth stepped by the plane equation, one thread
   Binned,     // the half-space rasterizer per 64x64 tile, tiles on threads (the same bits as HalfSpace)
+  Tiled,      // the z-buffer's SIMD tile kernel (TiledZBuffer::drawInOrder): DepthTest, Overwrite and
+              // WhereUnwritten, the same bits as HalfSpace; the other rules draw Binned
 };
 const char* drawRasterName(DrawRaster raster);
-/// The `raster` parameter of an algorithm that draws through the service, and its value.
-ParamSpec drawRasterParam(const char* defaultValue);
+/// The `raster` parameter of an algorithm that draws through the service (with `kernel`, drawScene
+/// with a rule DrawRaster::Tiled draws: "tiled" is offered), and its value.
+ParamSpec drawRasterParam(const char* defaultValue, bool kernel = false);
 DrawRaster drawRasterOf(const AlgorithmParams& params);
 
 /// The per-pixel buffers the drawing service draws with (a depth buffer of each storage type,
 /// the winning triangles), owned by the algorithm object that draws and kept from one frame to
 /// the next: a warm frame rewrites warm pages instead of faulting fresh ones in.
+class TiledZBuffer;
+
 class DrawBuffers {
  public:
+  DrawBuffers();
+  ~DrawBuffers();
+  DrawBuffers(DrawBuffers&&) noexcept;
+  DrawBuffers& operator=(DrawBuffers&&) noexcept;
+
   /// The depth buffer of values of type T (uint16_t, uint32_t or float: DepthT).
   template <class T>
   std::vector<T>& depth() { return drawn_.depth.get<T>(); }
@@ -69,6 +80,9 @@ class DrawBuffers {
   void keepPeeledLayer() { std::swap(drawn_, peeled_); }
   /// Forgets the peeled layer: the next DepthPeel layer is the nearest.
   void forgetPeeledLayer() { peeled_.clear(); }
+
+  /// DrawRaster::Tiled: the tile kernel's bins and tile buffers.
+  TiledZBuffer& tiled();
 
  private:
   // A depth buffer of each storage type.
@@ -95,6 +109,7 @@ class DrawBuffers {
     }
   };
   Layer drawn_, peeled_;
+  std::unique_ptr<TiledZBuffer> tiled_;
 };
 
 /// The counters of the statistics, as every algorithm counts them.

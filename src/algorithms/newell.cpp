@@ -519,7 +519,7 @@ AlgorithmInfo newellAlgorithm() {
   a.params = {
       {"max-fragments", ParamType::Int, "4000000", {}, 1, 1e9,
        "the most polygons the sort may hold (inputs and pieces): a sort that would make more stops with an error"},
-      drawRasterParam("binned"),
+      drawRasterParam("binned", /*kernel=*/true),
   };
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.capability = Capability::PaintsInOrder;

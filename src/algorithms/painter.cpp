@@ -74,7 +74,7 @@ AlgorithmInfo painterAlgorithm() {
   a.params = {sortKeyParam("centroid",
                            "the depth a face is sorted by: its area centroid (the documents' midpoint), its farthest "
                            "vertex, its nearest vertex, or the mean of its vertices"),
-              drawRasterParam("binned")};
+              drawRasterParam("binned", /*kernel=*/true)};
   a.guaranteeFor = [](const AlgorithmParams& p) { return listPriorityFailures(p.text("sort-key")); };
   a.guarantee = listPriorityFailures("centroid");
   a.capability = Capability::PaintsInOrder;

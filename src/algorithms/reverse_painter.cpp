@@ -45,7 +45,7 @@ AlgorithmInfo reversePainterAlgorithm() {
                "the front-to-back order: the BSP tree's (exact; the default heuristic, area, built once per scene), "
                "or faces sorted nearest first by their area centroid, farthest vertex, nearest vertex, or the mean "
                "of their vertices"},
-              drawRasterParam("binned")};
+              drawRasterParam("binned", /*kernel=*/true)};
   a.guaranteeFor = [](const AlgorithmParams& p) {
     if (p.text("order") != "bsp") return listPriorityFailures(p.text("order"));
     Guarantee exact;

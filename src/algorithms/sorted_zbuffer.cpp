@@ -35,7 +35,7 @@ AlgorithmInfo sortedZbufferAlgorithm() {
   a.source = "KTH report, KTH thesis";
   a.params = {sortKeyParam("min", "the depth faces are sorted by, nearest first: their nearest vertex, area centroid, "
                                   "farthest vertex, or the mean of their vertices"),
-              drawRasterParam("binned")};
+              drawRasterParam("binned", /*kernel=*/true)};
   a.guarantee.kind = Guarantee::Kind::Exact;
   a.guarantee.condition = "a z-buffer in any order; ties of equal depth are ambiguous";
   a.create = factoryOf<SortedZbuffer>();

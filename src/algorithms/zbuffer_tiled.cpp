@@ -11,6 +11,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include <hsr/occlusion.hpp>
 
@@ -217,6 +218,72 @@ void TiledZBuffer::draw(const Scene& scene, const Camera& cam, const RenderOptio
   if (culling) st.addMemory("occlusion_buffer", culling->memoryBytes);
   st.addMemory("front_end", state.fe.memoryBytes());
   addFrameMemory(st, frame);
+}
+
+namespace {
+
+// drawInOrder's priority keys: the k-th triangle of the list stores (k + 1) 2^-24 at every pixel
+// (a constant plane, linear mapping over [0, 1]): exact in f32 and in double, so distinct and
+// increasing down the list, and nearer than the clear value 1. Strictly farther than what a
+// pixel holds, a later triangle loses there, and a full tile or block rejects it whole.
+const DepthSetup kPriorityDepth{DepthFormat{DepthStorage::F32, DepthMapping::Linear}, 0.0, 1.0, false};
+void setPriority(SetupTriangle& t, size_t k) {
+  t.depthNum = Plane{0, 0, double(k + 1) * 0x1p-24};
+  t.depthDen = Plane{0, 0, 1};
+}
+
+}  // namespace
+
+TiledZBuffer::InOrderCounts TiledZBuffer::drawInOrder(std::span<const SetupTriangle> triangles, bool firstWins,
+                                                      const Camera& cam, const RenderOptions& opt,
+                                                      const TriangleShader& shade, Frame& frame) {
+  if (firstWins && triangles.size() > kMostFirstWins)
+    throw std::length_error("drawInOrder: more triangles than priority keys");
+  if (!state_) state_ = std::make_unique<State>();
+  TiledState& state = state_->tiles;
+  const DepthSetup depth = firstWins ? kPriorityDepth : DepthSetup{opt.depthFormat, cam.near, cam.far, cam.orthographic};
+
+  // The list cut into front-end chunks, drawn as copies: triangle k of the list is scene triangle
+  // k of its chunk (so the kernel's keys are the list's order), on the priority keys' planes when
+  // firstWins; each chunk binned by the worker that copied it.
+  FrontEndOutput& fe = state.fe;
+  const size_t perChunk = kChunkTriangles, chunks = (triangles.size() + perChunk - 1) / perChunk;
+  if (fe.chunks.size() < chunks) fe.chunks.resize(chunks);
+  fe.chunkCount = chunks;
+  fe.chunkTriangles = perChunk;
+  tiled::Bins& bins = state.bins;
+  tiled::prepareBins(bins, cam.width, cam.height, chunks);
+  bins.resolveRecords.assign(2 * chunks, nullptr);
+  parallelFor(0, chunks, resolveThreads(opt.threads), [&](size_t c) {
+    FrontEndChunk& chunk = fe.chunks[c];
+    const size_t first = c * perChunk, count = std::min(perChunk, triangles.size() - first);
+    chunk.firstTriangle = uint32_t(first);
+    chunk.triangles.assign(triangles.begin() + ptrdiff_t(first), triangles.begin() + ptrdiff_t(first + count));
+    chunk.nearest.resize(count);
+    chunk.deferred.clear();
+    chunk.clusters.clear();
+    chunk.counters = {};
+    for (size_t k = 0; k < count; ++k) {
+      SetupTriangle& t = chunk.triangles[k];
+      t.triangle = uint32_t(first + k);
+      if (firstWins) setPriority(t, first + k);
+      chunk.nearest[k] = nearestStored(t, depth);
+      if (t.maxX - t.minX + 1 >= kLargeBoxPixels && t.maxY - t.minY + 1 >= kLargeBoxPixels) ++chunk.counters.large;
+    }
+    bins.chunks[c].producer = uint32_t(currentPart());
+    tiled::binChunk(bins, c, chunk, &depth);
+    bins.resolveRecords[2 * c] = triangles.data() + first;
+  });
+  bins.projected = nullptr;  // (nothing deferred: no set-up in the tile pass)
+  bins.camera = &cam;
+  bins.sceneTriangles = nullptr;
+
+  Counters n;
+  tiled::RasterCounters counters;
+  drawTiled(opt, depth, shade, frame, state, n, counters);
+  bins.resolveRecords.clear();
+  return {counters.depthTests, counters.depthWrites, counters.culledTiles, n.covered,
+          state.memoryBytes() + fe.memoryBytes()};
 }
 
 }  // namespace hsr::algo

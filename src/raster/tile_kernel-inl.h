@@ -1407,7 +1407,7 @@ HWY_INLINE void ResolveFour(const Bins& bins, uint64_t* keys, uint64_t* cells, d
   const auto keyV = hn::LoadU(hu, keys);
   const double* words[4];
   for (int j = 0; j < 4; ++j)
-    words[j] = reinterpret_cast<const double*>(keys[j] ? &bins.triangle(keys[j]) : &kNothing) + 4;
+    words[j] = reinterpret_cast<const double*>(keys[j] ? &bins.resolved(keys[j]) : &kNothing) + 4;
   auto transpose = [&](int at, VH* out) HSR_ALWAYS_INLINE {
     VH q[4];
     for (int j = 0; j < 4; ++j) q[j] = hn::LoadU(h, words[j] + at);
@@ -1481,7 +1481,7 @@ void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
     if (hn::AllTrue(du, hn::Eq(same, hn::Zero(du)))) {
       if (only) {
         s.blockKey[b] = only;
-        s.blockTriangle[b] = &bins.triangle(only);
+        s.blockTriangle[b] = &bins.resolved(only);
       } else {
         s.blockClear[b] = true;
       }
@@ -1506,7 +1506,7 @@ void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
           auto cellV = hn::Set(du, emptyDepth), newKeyV = hn::Set(du, emptyTriangle);
           auto blend = [&](uint64_t key, auto lanes) {  // key's lanes get its values (0: background)
             if (!key) return;
-            const SetupTriangle& t = bins.triangle(key);
+            const SetupTriangle& t = bins.resolved(key);
             const auto eye = hn::BitCast(du32, NarrowToFloat(df, EyeDepthRow(t, X, Y)));
             cellV = hn::IfThenElse(lanes, hn::Or(hn::PromoteTo(du, eye), hn::Set(du, PackCell(0, Bits32(int32_t(t.face))))),
                                    cellV);
@@ -1525,7 +1525,7 @@ void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
         for (size_t g = 0; g < N; g += 4)
           ResolveFour<kColor>(bins, keys + g, cells + g, double(x0 + bx + int(k + g)) + 0.5, Y, emptyDepth,
                               emptyTriangle, [&](size_t j, uint64_t key) {
-                                const SetupTriangle& t = bins.triangle(key);
+                                const SetupTriangle& t = bins.resolved(key);
                                 keys[g + j] = PackCell(Bits32(int32_t(t.triangle)), colorOf(key, t));
                               });
         continue;
@@ -1537,7 +1537,7 @@ void PrepareResolveT(const TileJob& job, TileScratch& s, Rgba8 background) {
             keys[j] = emptyTriangle;
             continue;
           }
-          const SetupTriangle& t = bins.triangle(key);
+          const SetupTriangle& t = bins.resolved(key);
           const float eye = float(t.eyeDepth(double(x0 + bx + int(k + j)) + 0.5, Y));
           cells[j] = PackCell(Bits32(eye), Bits32(int32_t(t.face)));
           keys[j] = PackCell(Bits32(int32_t(t.triangle)), kColor ? colorOf(key, t) : 0);
@@ -1595,7 +1595,7 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
     // (written once); each row's eye depths in a loop of nothing else, whose divisions overlap
     // (as in ResolveDepthT), with EyeDepthAt's operations: faster than the general loop below
     // (see docs/benchmarks.md).
-    const SetupTriangle& t = bins.triangle(s.planeKey);
+    const SetupTriangle& t = bins.resolved(s.planeKey);
     const auto face = hn::Set(du32, Bits32(int32_t(t.face))), triangle = hn::Set(du32, Bits32(int32_t(t.triangle)));
     const auto color = hn::Set(du32, kColor ? colorOf(s.planeKey, t) : 0);
     for (size_t k = 0; k < size_t(w); k += N) {
@@ -1655,7 +1655,7 @@ uint64_t ResolveIdsT(const TileJob& job, const TileScratch& s, Rgba8 background,
         continue;
       }
       if (key != uniformKey) {
-        const SetupTriangle& t = bins.triangle(key);
+        const SetupTriangle& t = bins.resolved(key);
         uniformKey = key;
         planes.numA = hn::Set(d, t.depthNum.a), planes.numC = hn::Set(d, t.depthNum.c), numB = t.depthNum.b;
         planes.denA = hn::Set(d, t.depthDen.a), planes.denC = hn::Set(d, t.depthDen.c), denB = t.depthDen.b;

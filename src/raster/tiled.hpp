@@ -166,6 +166,10 @@ struct Bins {
   // [0, chunkCount) in use: each chunk's deferred clusters, in every tile their box overlaps
   std::vector<ChunkBins> clusters;
   std::vector<const SetupTriangle*> records;  // per chunk, two: its set-up triangles, its late records
+  // Per chunk, two, as `records`: the records the resolve reads each winner from, when not the
+  // ones drawn (empty: those). A frame drawn on priority keys is resolved from the triangles' own
+  // planes, ids and colours (algorithms/zbuffer_tiled.cpp, TiledZBuffer::drawInOrder).
+  std::vector<const SetupTriangle*> resolveRecords;
   // For setting deferred back faces up again: runFrontEnd's vertices and camera (see binChunk).
   const ProjectedVertex* projected = nullptr;
   const Camera* camera = nullptr;
@@ -196,7 +200,14 @@ struct Bins {
   void countEntries();
   uint64_t culled() const;  // pairs binChunk left out (ChunkBins::culled), over all chunks
   uint64_t memoryBytes() const;
-  const SetupTriangle& triangle(uint64_t key) const;
+  /// The record of triangle `key` as drawn, and as resolved (resolveRecords).
+  const SetupTriangle& triangle(uint64_t key) const { return recordOf(records, key); }
+  const SetupTriangle& resolved(uint64_t key) const {
+    return recordOf(resolveRecords.empty() ? records : resolveRecords, key);
+  }
+
+ private:
+  static const SetupTriangle& recordOf(const std::vector<const SetupTriangle*>& from, uint64_t key);
 };
 
 /// A triangle's name within its chunk, in 28 bits that order it as submitted: its scene
@@ -216,10 +227,10 @@ inline uint32_t localIndex(uint32_t local) { return local & ((1u << kLocalIndexB
 /// Names a triangle of chunk `chunk` in a tile buffer (0 = nothing drawn): keys compare in
 /// submission order.
 inline uint64_t triangleKey(size_t chunk, uint32_t local) { return (uint64_t(chunk) << 28 | local) + 1; }
-inline const SetupTriangle& Bins::triangle(uint64_t key) const {
+inline const SetupTriangle& Bins::recordOf(const std::vector<const SetupTriangle*>& from, uint64_t key) {
   const uint64_t k = key - 1;
   const uint32_t local = uint32_t(k) & ((1u << 28) - 1);
-  return records[size_t(k >> 28) * 2 + (local >> kLocalIndexBits & 1)][localIndex(local)];
+  return from[size_t(k >> 28) * 2 + (local >> kLocalIndexBits & 1)][localIndex(local)];
 }
 
 /// Counts of the tile pass. depth_tests/writes of the statistics come from here.
