@@ -98,6 +98,13 @@ std::vector<Variant> defaultVariants() {
     if (a.name == "zbuffer")  // the textbook z-buffer, on the painter's family's rasterizer and the reference one
       for (const char* raster : {"binned", "halfspace"})
         variants.push_back({std::string("zbuffer raster=") + raster, "zbuffer", {{"raster", raster}}});
+    // The painter's family on the z-buffer's SIMD tile kernel too, so that each is compared with
+    // the z-buffer on both rasterizers: "NAME" (binned, scalar) beside "zbuffer raster=binned",
+    // "NAME raster=tiled" beside "zbuffer".
+    for (const ParamSpec& p : a.params)
+      if (p.name == "raster" && a.name != "zbuffer" && p.defaultValue != "tiled" &&
+          std::find(p.choices.begin(), p.choices.end(), "tiled") != p.choices.end())
+        variants.push_back({a.name + " raster=tiled", a.name, {{"raster", "tiled"}}});
   }
   return variants;
 }

@@ -14,6 +14,7 @@
 #include "algorithms/bvh.hpp"
 #include "algorithms/draw.hpp"
 #include "algorithms/polygon_split.hpp"
+#include "setup/fragment_depth.hpp"
 
 namespace hsr::algo {
 
@@ -139,6 +140,14 @@ class TiledZBuffer {
   /// applies the rule and a full tile or block rejects the rest at once; each pixel is resolved
   /// from its winner's own planes, ids and colour. Otherwise: the depth test in the frame's
   /// format, ties to the first in the list.
+  /// drawInOrder's priority keys: the k-th triangle of a firstWins list stores (k + 1) 2^-24 at
+  /// every pixel (setPriority makes its planes a constant and returns the value; linear mapping
+  /// over [0, 1]): exact in f32 and in double, so distinct and increasing down the list, and nearer
+  /// than the clear value 1. The value is also its nearest bound (nearestStored's margins round
+  /// back to it in f32). Strictly farther than what a pixel holds, a later triangle loses there,
+  /// and a full tile or block rejects it whole.
+  static const DepthSetup kPriorityDepth;
+  static double setPriority(SetupTriangle& t, size_t k);
   static constexpr size_t kMostFirstWins = (size_t(1) << 24) - 2;
   InOrderCounts drawInOrder(std::span<const SetupTriangle> triangles, bool firstWins, const Camera& camera,
                             const RenderOptions& options, const TriangleShader& shade, Frame& frame);

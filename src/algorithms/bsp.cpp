@@ -74,7 +74,8 @@ void BspDrawing::draw(const Scene& scene, const Camera& camera, const RenderOpti
     std::vector<uint32_t> start(rank.size() + 1, 0);
     for (const SetupTriangle& t : tris) ++start[rank[fragmentOf[t.face]] + 1];
     for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
-    std::vector<SetupTriangle> sorted(tris.size());
+    std::vector<SetupTriangle>& sorted = buffers.frameScratch().reordered;
+    sorted.resize(tris.size());
     for (const SetupTriangle& t : tris) sorted[start[rank[fragmentOf[t.face]]]++] = t;
     tris.swap(sorted);
   };

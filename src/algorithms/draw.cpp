@@ -383,7 +383,7 @@ void drawOnKernel(FrameWork& work, WriteRule rule, const Camera& camera, const R
   if (derived)
     for (SetupTriangle& t : list) {
       const uint32_t original = derived->triangle[t.triangle];
-      if (color) t.color = shade(original), t.frontFacing = true;  // (the resolve reads a front face's colour)
+      t.frontFacing = false;  // (the resolve shades the original triangle where it shows: colorOf's colour)
       t.face = derived->face[t.face];
       t.triangle = original;
     }
@@ -521,10 +521,19 @@ void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& op
   Stats& st = frame.stats;
   const TriangleShader shade(scene, camera, options.shading);  // (the original scene's faces)
   FrameWork work;
+  DrawBuffers::FrameScratch* kept = steps.buffers ? &steps.buffers->frameScratch() : nullptr;
+  if (kept) work.triangles.swap(kept->triangles);  // (given back below)
   if (steps.setUp) {
-    FrontEndOutput fe;
-    runFrontEnd(steps.derived ? *steps.derived->scene : scene, camera, options, fe);
-    work.triangles = fe.flatten();
+    FrontEndOutput own;
+    FrontEndOutput& fe = kept ? kept->frontEnd : own;
+    if (steps.derived) {  // unshaded: a derived triangle takes its original's colour (colorOf)
+      RenderOptions unshaded = options;
+      unshaded.outputs = FrameOutputs(uint8_t(options.outputs) & ~uint8_t(FrameOutputs::Color));
+      runFrontEnd(*steps.derived->scene, camera, unshaded, fe);
+    } else {
+      runFrontEnd(scene, camera, options, fe);
+    }
+    fe.flattenInto(work.triangles);
     work.frontEnd = fe;
     work.frontEndBytes = fe.memoryBytes();
     st.addTime("frontend", timer.lap());
@@ -546,8 +555,10 @@ void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& op
   draw(work, shade);
   const double elapsed = timer.lap(), ownStages = timed() - before;
   st.addTime("raster", std::max(0.0, elapsed - ownStages));
-  recordDrawStats(st, work.frontEnd, work.frontEndBytes, work.triangles.capacity(), work.counters,
+  // (the frame's set-up triangles, not the kept buffers' capacity, which depends on earlier frames)
+  recordDrawStats(st, work.frontEnd, work.frontEndBytes, work.triangles.size(), work.counters,
                   steps.depthTested ? &options.depthFormat : nullptr, frame);
+  if (kept) work.triangles.swap(kept->triangles);
 }
 
 void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& options, WriteRule rule,
@@ -559,7 +570,8 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
   if (raster == DrawRaster::Tiled && !kernelDraws(rule, frame)) raster = DrawRaster::Binned;
   const bool onKernel = raster == DrawRaster::Tiled;
   drawFrame(scene, camera, options,
-            {.order = order, .depthTested = depthTested, .clearFrame = !onKernel, .derived = derived},
+            {.order = order, .depthTested = depthTested, .clearFrame = !onKernel, .derived = derived,
+             .buffers = &buffers},
             [&](FrameWork& work, const TriangleShader& shade) {
               if (onKernel)
                 drawOnKernel(work, rule, camera, options, shade, derived, buffers, frame);

@@ -84,6 +84,14 @@ class DrawBuffers {
   /// DrawRaster::Tiled: the tile kernel's bins and tile buffers.
   TiledZBuffer& tiled();
 
+  /// What a frame's steps keep from one frame to the next (drawFrame with FrameSteps::buffers):
+  /// the front end's output, the set-up triangles, and room to reorder them (byFaceRank).
+  struct FrameScratch {
+    FrontEndOutput frontEnd;
+    std::vector<SetupTriangle> triangles, reordered;
+  };
+  FrameScratch& frameScratch() { return frameScratch_; }
+
  private:
   // A depth buffer of each storage type.
   struct DepthOfEachType {
@@ -110,6 +118,7 @@ class DrawBuffers {
   };
   Layer drawn_, peeled_;
   std::unique_ptr<TiledZBuffer> tiled_;
+  FrameScratch frameScratch_;
 };
 
 /// The counters of the statistics, as every algorithm counts them.
@@ -248,6 +257,7 @@ struct FrameSteps {
   bool setUp = true;                      // false: the draw step sets up the triangles itself and fills
                                           // the work's front-end counts (occlusion culling interleaves them)
   const DerivedScene* derived = nullptr;  // draw its scene's triangles (DerivedScene)
+  DrawBuffers* buffers = nullptr;         // keeps the front end's output and the triangles (none: a frame's own)
 };
 
 /// A frame's drawing step: draws `work.triangles` into the frame and resolves them, counting into

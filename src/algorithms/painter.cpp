@@ -20,7 +20,7 @@ class Painter final : public SceneAlgorithm, public PaintsInOrder {
   void render(const Camera& camera, const RenderOptions& options, Frame& frame) override {
     const SortKey key = sortKeyOf(params_.text("sort-key"));
     drawScene(scene_, camera, options, hasTransparency(scene_) ? WriteRule::Blend : WriteRule::Overwrite,
-              drawRasterOf(params_), byFaceRank(faceRanks(faceKeys(scene_, camera, key), /*backToFront=*/true)),
+              drawRasterOf(params_), byFaceRank(faceRanks(faceKeys(scene_, camera, key), /*backToFront=*/true), &buffers_.frameScratch().reordered),
               buffers_, frame);
     frame.stats.setDetail("sort_key", params_.text("sort-key"));
   }

@@ -25,7 +25,7 @@ class ReversePainter final : public SceneAlgorithm {
     } else {
       const SortKey key = sortKeyOf(params_.text("order"));
       drawScene(scene_, camera, options, rule, drawRasterOf(params_),
-                byFaceRank(faceRanks(faceKeys(scene_, camera, key), /*backToFront=*/false)), buffers_, frame);
+                byFaceRank(faceRanks(faceKeys(scene_, camera, key), /*backToFront=*/false), &buffers_.frameScratch().reordered), buffers_, frame);
     }
     frame.stats.setDetail("order", params_.text("order"));
   }

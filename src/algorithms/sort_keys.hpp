@@ -40,7 +40,8 @@ bool depthRangesSeparate(const Scene& scene, const Camera& camera);
 std::vector<uint32_t> transparentLast(const Scene& scene, const Camera& camera, const std::vector<uint32_t>& opaqueRank,
                                       SortKey key);
 
-/// Reorders set-up triangles by their face's rank (stable: a face's triangles keep their order).
-OrderFn byFaceRank(std::vector<uint32_t> rank);
+/// Reorders set-up triangles by their face's rank (stable: a face's triangles keep their order),
+/// in `scratch` when given (room kept from frame to frame, swapped with the triangles).
+OrderFn byFaceRank(std::vector<uint32_t> rank, std::vector<SetupTriangle>* scratch = nullptr);
 
 }  // namespace hsr::algo

@@ -21,7 +21,7 @@ class SortedZbuffer final : public SceneAlgorithm {
     const bool transparent = hasTransparency(scene_);
     if (transparent) rank = transparentLast(scene_, camera, rank, key);
     drawScene(scene_, camera, options, transparent ? WriteRule::DepthTestBlend : WriteRule::DepthTest,
-              drawRasterOf(params_), byFaceRank(std::move(rank)), buffers_, frame);
+              drawRasterOf(params_), byFaceRank(std::move(rank), &buffers_.frameScratch().reordered), buffers_, frame);
     frame.stats.setDetail("sort_key", params_.text("sort-key"));
   }
 };

@@ -220,19 +220,14 @@ void TiledZBuffer::draw(const Scene& scene, const Camera& cam, const RenderOptio
   addFrameMemory(st, frame);
 }
 
-namespace {
+const DepthSetup TiledZBuffer::kPriorityDepth{DepthFormat{DepthStorage::F32, DepthMapping::Linear}, 0.0, 1.0, false};
 
-// drawInOrder's priority keys: the k-th triangle of the list stores (k + 1) 2^-24 at every pixel
-// (a constant plane, linear mapping over [0, 1]): exact in f32 and in double, so distinct and
-// increasing down the list, and nearer than the clear value 1. Strictly farther than what a
-// pixel holds, a later triangle loses there, and a full tile or block rejects it whole.
-const DepthSetup kPriorityDepth{DepthFormat{DepthStorage::F32, DepthMapping::Linear}, 0.0, 1.0, false};
-void setPriority(SetupTriangle& t, size_t k) {
-  t.depthNum = Plane{0, 0, double(k + 1) * 0x1p-24};
+double TiledZBuffer::setPriority(SetupTriangle& t, size_t k) {
+  const double value = double(k + 1) * 0x1p-24;
+  t.depthNum = Plane{0, 0, value};
   t.depthDen = Plane{0, 0, 1};
+  return value;
 }
-
-}  // namespace
 
 TiledZBuffer::InOrderCounts TiledZBuffer::drawInOrder(std::span<const SetupTriangle> triangles, bool firstWins,
                                                       const Camera& cam, const RenderOptions& opt,
@@ -266,8 +261,8 @@ TiledZBuffer::InOrderCounts TiledZBuffer::drawInOrder(std::span<const SetupTrian
     for (size_t k = 0; k < count; ++k) {
       SetupTriangle& t = chunk.triangles[k];
       t.triangle = uint32_t(first + k);
-      if (firstWins) setPriority(t, first + k);
-      chunk.nearest[k] = nearestStored(t, depth);
+      // (a constant plane's nearest bound is its value: its margins round back to it in f32)
+      chunk.nearest[k] = firstWins ? setPriority(t, first + k) : nearestStored(t, depth);
       if (t.maxX - t.minX + 1 >= kLargeBoxPixels && t.maxY - t.minY + 1 >= kLargeBoxPixels) ++chunk.counters.large;
     }
     bins.chunks[c].producer = uint32_t(currentPart());

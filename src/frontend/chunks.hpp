@@ -122,6 +122,8 @@ struct FrontEndOutput : FrontEndCounters {
   }
   /// All set-up triangles in one list (a copy; for tests and tools).
   std::vector<SetupTriangle> flatten() const;
+  /// The same into `all`, whose memory is reused.
+  void flattenInto(std::vector<SetupTriangle>& all) const;
   uint64_t memoryBytes() const;
 
   // Scratch reused from frame to frame (no allocation once warm).

@@ -199,9 +199,14 @@ size_t FrontEndOutput::triangleCount() const {
 
 std::vector<SetupTriangle> FrontEndOutput::flatten() const {
   std::vector<SetupTriangle> all;
-  all.reserve(triangleCount());
-  forEach([&](const SetupTriangle& t) { all.push_back(t); });
+  flattenInto(all);
   return all;
+}
+
+void FrontEndOutput::flattenInto(std::vector<SetupTriangle>& all) const {
+  all.clear();
+  all.reserve(triangleCount());
+  for (size_t c = 0; c < chunkCount; ++c) all.insert(all.end(), chunks[c].triangles.begin(), chunks[c].triangles.end());
 }
 
 uint64_t FrontEndOutput::memoryBytes() const {
