@@ -380,13 +380,19 @@ void drawOnKernel(FrameWork& work, WriteRule rule, const Camera& camera, const R
   }
   if (rule == WriteRule::Overwrite) std::reverse(list.begin(), list.end());
   const bool color = has(options.outputs, FrameOutputs::Color);
-  if (derived)
+  if (derived) {
     for (SetupTriangle& t : list) {
-      const uint32_t original = derived->triangle[t.triangle];
-      t.frontFacing = false;  // (the resolve shades the original triangle where it shows: colorOf's colour)
       t.face = derived->face[t.face];
-      t.triangle = original;
+      t.triangle = derived->triangle[t.triangle];
     }
+    if (color) {  // each its original triangle's colour (colorOf), shaded in SIMD batches
+      std::vector<uint32_t> originals(list.size());
+      std::vector<Rgba8> colors(list.size());
+      for (size_t i = 0; i < list.size(); ++i) originals[i] = list[i].triangle;
+      shade.shadeMany(originals.data(), originals.size(), colors.data());
+      for (size_t i = 0; i < list.size(); ++i) list[i].color = colors[i], list[i].frontFacing = true;
+    }
+  }
   const TiledZBuffer::InOrderCounts c =
       buffers.tiled().drawInOrder(list, /*firstWins=*/!depthTest, camera, options, shade, frame);
   DrawCounters& n = work.counters;
