@@ -8,6 +8,17 @@
 #include <optional>
 
 namespace hsr::cli {
+
+const Json* runIn(const Json& c, const std::string& variant) {
+  for (const Json& r : c["runs"])
+    if (r["variant"] == variant && !r.contains("error")) return &r;
+  return nullptr;
+}
+
+std::string caseName(const Json& c) {
+  return fmt::format("{} {}x{}", c["scene"].get<std::string>(), c["width"].get<int>(), c["height"].get<int>());
+}
+
 namespace {
 
 // The run of `variant` on the case of `scene` at `width` x `height`, if it ran without error.
@@ -27,11 +38,6 @@ std::vector<const Json*> casesOfGroup(const Json& results, const std::string& pr
   return out;
 }
 
-const Json* runIn(const Json& c, const std::string& variant) {
-  for (const Json& r : c["runs"])
-    if (r["variant"] == variant && !r.contains("error")) return &r;
-  return nullptr;
-}
 
 double excessWrites(const Json& run) {
   return double(run["color_writes"].get<uint64_t>()) - double(run["covered_pixels"].get<uint64_t>());
@@ -45,9 +51,6 @@ Json notMeasured(const std::string& text, const std::string& source, const std::
   return claim(text, source, why, "not measured");
 }
 
-std::string caseName(const Json& c) {
-  return fmt::format("{} {}x{}", c["scene"].get<std::string>(), c["width"].get<int>(), c["height"].get<int>());
-}
 
 // KTH thesis: on unsorted input the z-buffer overdraws about 50 % less than the painter's.
 Json overdrawClaim(const Json& results) {

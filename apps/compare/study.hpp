@@ -57,6 +57,11 @@ struct StudySettings {
 Json runStudy(const std::vector<StudyCase>& cases, const std::vector<Variant>& variants, const StudySettings& settings,
               const std::function<void(const Json&)>& caseDone);
 
+/// The run of `variant` in case `c` of the results, if it ran without error (claims.cpp).
+const Json* runIn(const Json& c, const std::string& variant);
+/// A case's name: its scene and size.
+std::string caseName(const Json& c);
+
 /// Z-fighting: the nearly coplanar built-in scene at several gaps, pixels whose face differs from
 /// the reference per depth format, with pictures.
 Json zfightExperiment(const StudySettings& settings, bool quick);

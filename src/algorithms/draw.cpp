@@ -404,11 +404,15 @@ void drawOnKernel(FrameWork& work, WriteRule rule, const Camera& camera, const R
   frame.stats.addMemory("tiled_state", c.memoryBytes);
 }
 
-// Whether DrawRaster::Tiled draws `rule` into `frame` (else the frame is drawn Binned): the
-// depth test and the list-priority rules, unless the frame counts each pixel's writes.
+// Whether DrawRaster::Tiled draws `rule` (else the frame is drawn Binned): the depth test and
+// the list-priority rules. It does not count each pixel's writes: a frame that asks is refused.
 bool kernelDraws(WriteRule rule, const Frame& frame) {
-  const bool rules = rule == WriteRule::DepthTest || rule == WriteRule::Overwrite || rule == WriteRule::WhereUnwritten;
-  return rules && frame.writes.empty();
+  const bool draws = rule == WriteRule::DepthTest || rule == WriteRule::Overwrite || rule == WriteRule::WhereUnwritten;
+  if (draws && !frame.writes.empty())
+    throw InputError(Setting::OverdrawImage, "",
+                     "raster=tiled does not count writes per pixel (the tile kernel replaces whole blocks at once); "
+                     "raster=binned draws the same image and does");
+  return draws;
 }
 
 }  // namespace
@@ -510,7 +514,7 @@ ParamSpec drawRasterParam(const char* defaultValue, bool kernel) {
           "fragments from the scalar half-space rasterizer on one thread (the reference), the lecture notes' "
           "scanline rasterizer, the half-space rasterizer binned into 64x64 tiles on threads, or the z-buffer's "
           "SIMD tile kernel: the same image, the first fragment in priority order winning each pixel (transparent "
-          "scenes, and frames counting each pixel's writes, draw binned)"};
+          "scenes draw binned; no overdraw picture)"};
 }
 
 DrawRaster drawRasterOf(const AlgorithmParams& params) {
