@@ -149,6 +149,14 @@ class TiledZBuffer {
   static const DepthSetup kPriorityDepth;
   static double setPriority(SetupTriangle& t, size_t k);
   static constexpr size_t kMostFirstWins = (size_t(1) << 24) - 2;
+
+  /// Mesh culling for a frame drawn in an order that keeps each pixel's nearest fragment (the
+  /// depth test, or an exact priority order such as the BSP tree's): the scene triangles of the
+  /// meshes neither outside the view nor hidden (ascending), or null when culling does not pay for
+  /// this frame (as draw() decides) — a hidden mesh has no fragment nearest at any pixel, so
+  /// leaving it out keeps the image. `meshesCulled`: how many were found hidden.
+  const std::vector<TriangleRange>* visibleMeshes(const Scene& scene, const Camera& camera,
+                                                  const RenderOptions& options, uint64_t& meshesCulled);
   InOrderCounts drawInOrder(std::span<const SetupTriangle> triangles, bool firstWins, const Camera& camera,
                             const RenderOptions& options, const TriangleShader& shade, Frame& frame);
 

@@ -79,7 +79,7 @@ void BspDrawing::draw(const Scene& scene, const Camera& camera, const RenderOpti
     for (const SetupTriangle& t : tris) sorted[start[rank[fragmentOf[t.face]]]++] = t;
     tris.swap(sorted);
   };
-  drawScene(scene, camera, options, rule, raster, byRank, buffers, frame, &built_->derived);
+  drawScene(scene, camera, options, rule, raster, byRank, buffers, frame, &built_->derived, /*exactOrder=*/true);
 
   Stats& st = frame.stats;
   if (built) st.addTime("build", built_->buildMs);

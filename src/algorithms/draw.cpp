@@ -369,14 +369,16 @@ void drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawR
 // The frame's triangles through the tile kernel (DrawRaster::Tiled, TiledZBuffer::drawInOrder),
 // counted as the drawing service counts: a list-priority rule as "the first in a list wins" (the
 // drawing order under WhereUnwritten; reversed under Overwrite, whose last fragment wins), with
-// the scene's ids and colours when the triangles are derived geometry.
-void drawOnKernel(FrameWork& work, WriteRule rule, const Camera& camera, const RenderOptions& options,
+// the scene's ids and colours when the triangles are derived geometry. Returns the rasterizer
+// that drew: Binned for a list longer than the priority keys.
+DrawRaster drawOnKernel(FrameWork& work, WriteRule rule, const Camera& camera, const RenderOptions& options,
                   const TriangleShader& shade, const DerivedScene* derived, DrawBuffers& buffers, Frame& frame) {
   std::vector<SetupTriangle>& list = work.triangles;
   const bool depthTest = rule == WriteRule::DepthTest;
   if (!depthTest && list.size() > TiledZBuffer::kMostFirstWins) {  // more than it has priority keys for
     frame.clear(options.background, resolveThreads(options.threads));
-    return drawOrdered(list, rule, DrawRaster::Binned, camera, options, shade, buffers, frame, work.counters, derived);
+    drawOrdered(list, rule, DrawRaster::Binned, camera, options, shade, buffers, frame, work.counters, derived);
+    return DrawRaster::Binned;
   }
   if (rule == WriteRule::Overwrite) std::reverse(list.begin(), list.end());
   const bool color = has(options.outputs, FrameOutputs::Color);
@@ -402,6 +404,7 @@ void drawOnKernel(FrameWork& work, WriteRule rule, const Camera& camera, const R
   n.covered = c.covered;
   n.skippedFull = depthTest ? 0 : c.skippedPairs;
   frame.stats.addMemory("tiled_state", c.memoryBytes);
+  return DrawRaster::Tiled;
 }
 
 // Whether DrawRaster::Tiled draws `rule` (else the frame is drawn Binned): the depth test and
@@ -536,12 +539,14 @@ void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& op
   if (steps.setUp) {
     FrontEndOutput own;
     FrontEndOutput& fe = kept ? kept->frontEnd : own;
+    // (with `only`, clusters are not culled whole: its ranges need not be unions of meshes)
+    const FrontEndOptions only{.deferClusters = steps.only == nullptr, .only = steps.only};
     if (steps.derived) {  // unshaded: a derived triangle takes its original's colour (colorOf)
       RenderOptions unshaded = options;
       unshaded.outputs = FrameOutputs(uint8_t(options.outputs) & ~uint8_t(FrameOutputs::Color));
-      runFrontEnd(*steps.derived->scene, camera, unshaded, fe);
+      runFrontEnd(*steps.derived->scene, camera, unshaded, fe, {}, only);
     } else {
-      runFrontEnd(scene, camera, options, fe);
+      runFrontEnd(scene, camera, options, fe, {}, only);
     }
     fe.flattenInto(work.triangles);
     work.frontEnd = fe;
@@ -571,20 +576,44 @@ void drawFrame(const Scene& scene, const Camera& camera, const RenderOptions& op
   if (kept) work.triangles.swap(kept->triangles);
 }
 
+// The triangles of the scene drawn (derived geometry's, when given) whose scene meshes mesh
+// culling left (TiledZBuffer::visibleMeshes), or null: all of them. Counts the meshes culled.
+const std::vector<TriangleRange>* unculledTriangles(const Scene& scene, const Camera& camera,
+                                                   const RenderOptions& options, const DerivedScene* derived,
+                                                   DrawBuffers& buffers, uint64_t& meshesCulled) {
+  const std::vector<TriangleRange>* visible = buffers.tiled().visibleMeshes(scene, camera, options, meshesCulled);
+  if (!visible || !derived) return visible;
+  // The derived triangles whose original triangle is left, as runs.
+  std::vector<uint8_t> left(scene.triangles.size(), 0);
+  for (const TriangleRange& r : *visible) std::fill(left.begin() + r.first, left.begin() + r.end, uint8_t(1));
+  std::vector<TriangleRange>& only = buffers.frameScratch().only;
+  only.clear();
+  for (uint32_t t = 0; t < derived->triangle.size(); ++t) {
+    if (!left[derived->triangle[t]]) continue;
+    if (!only.empty() && only.back().end == t) ++only.back().end;
+    else only.push_back({t, t + 1});
+  }
+  return &only;
+}
+
 void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& options, WriteRule rule,
                DrawRaster raster, const OrderFn& order, DrawBuffers& buffers, Frame& frame,
-               const DerivedScene* derived) {
+               const DerivedScene* derived, bool exactOrder) {
   const bool depthTested =
       rule == WriteRule::DepthTest || rule == WriteRule::DepthTestBlend || rule == WriteRule::DepthPeel;
   uint64_t skippedFull = 0;
   if (raster == DrawRaster::Tiled && !kernelDraws(rule, frame)) raster = DrawRaster::Binned;
   const bool onKernel = raster == DrawRaster::Tiled;
+  uint64_t meshesCulled = 0;
+  const bool keepsNearest = rule == WriteRule::DepthTest || (exactOrder && rule != WriteRule::Blend);
+  const std::vector<TriangleRange>* only =
+      onKernel && keepsNearest ? unculledTriangles(scene, camera, options, derived, buffers, meshesCulled) : nullptr;
   drawFrame(scene, camera, options,
             {.order = order, .depthTested = depthTested, .clearFrame = !onKernel, .derived = derived,
-             .buffers = &buffers},
+             .buffers = &buffers, .only = only},
             [&](FrameWork& work, const TriangleShader& shade) {
               if (onKernel)
-                drawOnKernel(work, rule, camera, options, shade, derived, buffers, frame);
+                raster = drawOnKernel(work, rule, camera, options, shade, derived, buffers, frame);
               else
                 drawOrdered(work.triangles, rule, raster, camera, options, shade, buffers, frame, work.counters,
                             derived);
@@ -595,6 +624,7 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
   st.setDetail("rasterizer", drawRasterName(raster));
   st.setDetail("write_rule", writeRuleName(rule));
   if (rule == WriteRule::WhereUnwritten || rule == WriteRule::BlendUnder) st.setDetail("skipped_full", skippedFull);
+  if (only) st.setDetail("meshes_culled_occlusion", meshesCulled);
 }
 
 }  // namespace hsr::algo

@@ -89,6 +89,7 @@ class DrawBuffers {
   struct FrameScratch {
     FrontEndOutput frontEnd;
     std::vector<SetupTriangle> triangles, reordered;
+    std::vector<TriangleRange> only;  // the derived triangles of the meshes left after culling
   };
   FrameScratch& frameScratch() { return frameScratch_; }
 
@@ -258,6 +259,7 @@ struct FrameSteps {
                                           // the work's front-end counts (occlusion culling interleaves them)
   const DerivedScene* derived = nullptr;  // draw its scene's triangles (DerivedScene)
   DrawBuffers* buffers = nullptr;         // keeps the front end's output and the triangles (none: a frame's own)
+  const std::vector<TriangleRange>* only = nullptr;  // set up only these triangles (of the scene drawn)
 };
 
 /// A frame's drawing step: draws `work.triangles` into the frame and resolves them, counting into
@@ -281,9 +283,12 @@ void recordDrawStats(Stats& st, const FrontEndCounters& fe, uint64_t frontEndByt
 
 /// A frame through the drawing service: drawFrame whose draw step draws the triangles in their
 /// order under `rule` on `raster` (each pixel's written fragments in Frame::writes, when sized),
-/// with the details "rasterizer" and "write_rule".
+/// with the details "rasterizer" and "write_rule". `exactOrder`: the order is right for every
+/// pair of fragments that overlap (the BSP tree's), so each pixel keeps its nearest fragment;
+/// on DrawRaster::Tiled, that rule and the depth test cull hidden meshes first
+/// (TiledZBuffer::visibleMeshes: the same image, fewer triangles set up).
 void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& options, WriteRule rule,
                DrawRaster raster, const OrderFn& order, DrawBuffers& buffers, Frame& frame,
-               const DerivedScene* derived = nullptr);
+               const DerivedScene* derived = nullptr, bool exactOrder = false);
 
 }  // namespace hsr::algo

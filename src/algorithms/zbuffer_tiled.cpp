@@ -31,6 +31,10 @@ struct Counters {
   uint64_t covered = 0;
 };
 
+// Scenes of fewer triangles are not culled mesh by mesh: the kept tiles' extra pass costs more
+// than culling saves there (docs/benchmarks.md).
+constexpr size_t kByMeshesTriangles = 8192;
+
 // ---------------------------------------------------------------------------------------------
 // The tiled path (its state, front end and binning shared with the occlusion buffer: tiled_pass.hpp).
 
@@ -182,9 +186,7 @@ void TiledZBuffer::draw(const Scene& scene, const Camera& cam, const RenderOptio
 
   // Many meshes and enough triangles: mesh culling (docs/occlusion.md) through the occlusion
   // buffer this object keeps: the buffer's first pass, then this path's frame of the meshes not
-  // found hidden (algo::cullMeshes). Scenes of few triangles skip it: the kept tiles' extra pass
-  // costs more than culling saves there (docs/benchmarks.md).
-  constexpr size_t kByMeshesTriangles = 8192;
+  // found hidden (algo::cullMeshes); scenes of few triangles skip it (kByMeshesTriangles).
   const bool byMeshes =
       scene.triangles.size() >= kByMeshesTriangles && meshCullingPaysForFrame(scene, cam, opt.tiled);
   OcclusionBuffer& occluders = state_->occluders;
@@ -218,6 +220,16 @@ void TiledZBuffer::draw(const Scene& scene, const Camera& cam, const RenderOptio
   if (culling) st.addMemory("occlusion_buffer", culling->memoryBytes);
   st.addMemory("front_end", state.fe.memoryBytes());
   addFrameMemory(st, frame);
+}
+
+const std::vector<TriangleRange>* TiledZBuffer::visibleMeshes(const Scene& scene, const Camera& cam,
+                                                             const RenderOptions& opt, uint64_t& meshesCulled) {
+  meshesCulled = 0;
+  if (scene.triangles.size() < kByMeshesTriangles || !meshCullingPaysForFrame(scene, cam, opt.tiled)) return nullptr;
+  if (!state_) state_ = std::make_unique<State>();
+  const MeshCulling& culling = cullMeshes(state_->occluders, scene, cam, opt);
+  meshesCulled = culling.meshesCulled;
+  return &culling.ranges;
 }
 
 const DepthSetup TiledZBuffer::kPriorityDepth{DepthFormat{DepthStorage::F32, DepthMapping::Linear}, 0.0, 1.0, false};
