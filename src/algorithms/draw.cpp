@@ -605,7 +605,7 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
   if (raster == DrawRaster::Tiled && !kernelDraws(rule, frame)) raster = DrawRaster::Binned;
   const bool onKernel = raster == DrawRaster::Tiled;
   uint64_t meshesCulled = 0;
-  const bool keepsNearest = rule == WriteRule::DepthTest || (exactOrder && rule != WriteRule::Blend);
+  const bool keepsNearest = rule == WriteRule::DepthTest || exactOrder;  // (on the kernel: a rule it draws)
   const std::vector<TriangleRange>* only =
       onKernel && keepsNearest ? unculledTriangles(scene, camera, options, derived, buffers, meshesCulled) : nullptr;
   drawFrame(scene, camera, options,
