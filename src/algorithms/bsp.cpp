@@ -9,6 +9,7 @@
 #include <string>
 
 #include "algorithms/algorithms.hpp"
+#include "algorithms/sort_keys.hpp"
 #include "algorithms/draw.hpp"
 #include "core/timer.hpp"
 
@@ -68,17 +69,12 @@ void BspDrawing::draw(const Scene& scene, const Camera& camera, const RenderOpti
   for (uint32_t i = 0; i < order.size(); ++i) rank[order[i]] = frontToBack ? uint32_t(order.size()) - 1 - i : i;
   const double traverseMs = timer.lap();
 
-  // Set-up triangles in their fragment's rank, stably: a counting sort, linear in the triangles.
+  // Set-up triangles in their fragment's rank (byFaceRank: a stable counting sort), each face of
+  // the derived scene ranked as the fragment it is part of.
   const std::vector<uint32_t>& fragmentOf = built_->fragmentOf;
-  const OrderFn byRank = [&](std::vector<SetupTriangle>& tris) {
-    std::vector<uint32_t> start(rank.size() + 1, 0);
-    for (const SetupTriangle& t : tris) ++start[rank[fragmentOf[t.face]] + 1];
-    for (size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
-    std::vector<SetupTriangle>& sorted = buffers.frameScratch().reordered;
-    sorted.resize(tris.size());
-    for (const SetupTriangle& t : tris) sorted[start[rank[fragmentOf[t.face]]]++] = t;
-    tris.swap(sorted);
-  };
+  std::vector<uint32_t> faceRank(fragmentOf.size());
+  for (size_t f = 0; f < fragmentOf.size(); ++f) faceRank[f] = rank[fragmentOf[f]];
+  const OrderFn byRank = byFaceRank(std::move(faceRank), &buffers.frameScratch().reordered);
   drawScene(scene, camera, options, rule, raster, byRank, buffers, frame, &built_->derived, /*exactOrder=*/true);
 
   Stats& st = frame.stats;

@@ -383,14 +383,15 @@ DrawRaster drawOnKernel(FrameWork& work, WriteRule rule, const Camera& camera, c
   if (rule == WriteRule::Overwrite) std::reverse(list.begin(), list.end());
   const bool color = has(options.outputs, FrameOutputs::Color);
   if (derived) {
-    for (SetupTriangle& t : list) {
+    std::vector<uint32_t> originals(color ? list.size() : 0);
+    for (size_t i = 0; i < list.size(); ++i) {
+      SetupTriangle& t = list[i];
       t.face = derived->face[t.face];
       t.triangle = derived->triangle[t.triangle];
+      if (color) originals[i] = t.triangle;
     }
     if (color) {  // each its original triangle's colour (colorOf), shaded in SIMD batches
-      std::vector<uint32_t> originals(list.size());
       std::vector<Rgba8> colors(list.size());
-      for (size_t i = 0; i < list.size(); ++i) originals[i] = list[i].triangle;
       shade.shadeMany(originals.data(), originals.size(), colors.data());
       for (size_t i = 0; i < list.size(); ++i) list[i].color = colors[i], list[i].frontFacing = true;
     }

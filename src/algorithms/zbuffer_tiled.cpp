@@ -31,9 +31,13 @@ struct Counters {
   uint64_t covered = 0;
 };
 
-// Scenes of fewer triangles are not culled mesh by mesh: the kept tiles' extra pass costs more
-// than culling saves there (docs/benchmarks.md).
-constexpr size_t kByMeshesTriangles = 8192;
+// Whether a frame is drawn after mesh culling: many meshes and enough triangles. Scenes of fewer
+// triangles skip it: the kept tiles' extra pass costs more than culling saves there
+// (docs/benchmarks.md).
+bool cullsByMeshes(const Scene& scene, const Camera& cam, const RenderOptions& opt) {
+  constexpr size_t kByMeshesTriangles = 8192;
+  return scene.triangles.size() >= kByMeshesTriangles && meshCullingPaysForFrame(scene, cam, opt.tiled);
+}
 
 // ---------------------------------------------------------------------------------------------
 // The tiled path (its state, front end and binning shared with the occlusion buffer: tiled_pass.hpp).
@@ -186,9 +190,8 @@ void TiledZBuffer::draw(const Scene& scene, const Camera& cam, const RenderOptio
 
   // Many meshes and enough triangles: mesh culling (docs/occlusion.md) through the occlusion
   // buffer this object keeps: the buffer's first pass, then this path's frame of the meshes not
-  // found hidden (algo::cullMeshes); scenes of few triangles skip it (kByMeshesTriangles).
-  const bool byMeshes =
-      scene.triangles.size() >= kByMeshesTriangles && meshCullingPaysForFrame(scene, cam, opt.tiled);
+  // found hidden (algo::cullMeshes), when it pays (cullsByMeshes).
+  const bool byMeshes = cullsByMeshes(scene, cam, opt);
   OcclusionBuffer& occluders = state_->occluders;
   const DepthSetup depth{opt.depthFormat, cam.near, cam.far, cam.orthographic};
   const MeshCulling* culling = nullptr;
@@ -225,7 +228,7 @@ void TiledZBuffer::draw(const Scene& scene, const Camera& cam, const RenderOptio
 const std::vector<TriangleRange>* TiledZBuffer::visibleMeshes(const Scene& scene, const Camera& cam,
                                                              const RenderOptions& opt, uint64_t& meshesCulled) {
   meshesCulled = 0;
-  if (scene.triangles.size() < kByMeshesTriangles || !meshCullingPaysForFrame(scene, cam, opt.tiled)) return nullptr;
+  if (!cullsByMeshes(scene, cam, opt)) return nullptr;
   if (!state_) state_ = std::make_unique<State>();
   const MeshCulling& culling = cullMeshes(state_->occluders, scene, cam, opt);
   meshesCulled = culling.meshesCulled;
