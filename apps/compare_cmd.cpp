@@ -187,7 +187,8 @@ Runner setupCompare(CLI::App& cmd) {
   cmd.add_option("--sizes", f->sizes, "Image sizes for the scenes given")->type_name("WxH,...")->capture_default_str();
   cmd.add_option("--algorithms", f->algorithms,
                  "Algorithm variants, comma-separated, each NAME[:KEY=VALUE...] (default: every registered algorithm, "
-                 "and zbuffer:raster=binned and zbuffer:raster=halfspace, the textbook z-buffer)")
+                 "zbuffer:raster=binned and zbuffer:raster=halfspace (the textbook z-buffer), and NAME:raster=tiled for "
+                 "the painter's family)")
       ->type_name("LIST");
   cmd.add_option("--exclude", f->exclude, "Algorithms to leave out")->type_name("LIST");
   cmd.add_option("--frames", f->frames, "Timed frames per run (median; one when a frame takes over 2 s)")
