@@ -366,6 +366,83 @@ void drawOrdered(std::span<const SetupTriangle> triangles, WriteRule rule, DrawR
   }
 }
 
+// The colours of Blend and BlendUnder drawn with the tile kernel, into frame.color: the same bits
+// as the rules' scalar forms. An opaque fragment hides what Blend drew before it and what
+// BlendUnder draws after it, so (1) a first-wins kernel pass over the opaque triangles finds each
+// pixel's deciding one (the last in the list under Blend, the first under BlendUnder), and (2) the
+// scalar rasterizer, binned on threads, composites only the transparent fragments that still show:
+// after it, over its colour (Blend), or before it, with its colour under them (BlendUnder).
+// Returns the fragments that wrote colour.
+uint64_t blendOnKernel(std::span<const SetupTriangle> list, WriteRule rule, const Camera& camera,
+                       const RenderOptions& options, const TriangleShader& shade, DrawBuffers& buffers, Frame& frame) {
+  const bool under = rule == WriteRule::BlendUnder;
+  std::vector<Rgba8> colors(list.size());
+  for (size_t i = 0; i < list.size(); ++i) colors[i] = triangleColor(list[i], shade);
+  // The opaque triangles, each carrying its place in the list as its triangle id, in the order
+  // whose first wins; the transparent ones and their places, in the list's order.
+  std::vector<SetupTriangle> opaque, clear;
+  std::vector<uint32_t> clearAt;
+  for (size_t k = 0; k < list.size(); ++k) {
+    const size_t i = under ? k : list.size() - 1 - k;
+    if (colors[i].a == 255) opaque.push_back(list[i]), opaque.back().triangle = uint32_t(i);
+  }
+  for (size_t i = 0; i < list.size(); ++i)
+    if (colors[i].a != 255) clear.push_back(list[i]), clearAt.push_back(uint32_t(i));
+
+  // 1. Each pixel's deciding opaque fragment: its place in the list, -1 where none.
+  Frame& decided = buffers.opaqueLayer();
+  decided.allocate(camera.width, camera.height, FrameOutputs::TriangleIds);
+  RenderOptions idsOnly = options;
+  idsOnly.outputs = FrameOutputs::TriangleIds;
+  const TiledZBuffer::InOrderCounts c = buffers.tiled().drawInOrder(opaque, /*firstWins=*/true, camera, idsOnly, shade, decided);
+  const std::span<const int32_t> opaqueAt(decided.triangleId);
+
+  // 2. The transparent fragments that still show, tile by tile.
+  const int tilesX = (camera.width + kBinTile - 1) / kBinTile, tilesY = (camera.height + kBinTile - 1) / kBinTile;
+  const std::vector<std::vector<uint32_t>> bins = binByCell(clear, kBinTile, kBinTile, tilesX, tilesY);
+  std::vector<uint64_t> composited(bins.size(), 0);
+  parallelFor(0, bins.size(), resolveThreads(options.threads), [&](size_t tile) {
+    const int x0 = int(tile % size_t(tilesX)) * kBinTile, y0 = int(tile / size_t(tilesX)) * kBinTile;
+    const int x1 = std::min(x0 + kBinTile, camera.width) - 1, y1 = std::min(y0 + kBinTile, camera.height) - 1;
+    auto pixels = [&](auto&& visit) {
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) visit(frame.index(x, y), size_t(y - y0) * kBinTile + size_t(x - x0));
+    };
+    std::vector<UnderSum> sums(under ? size_t(kBinTile) * kBinTile : 0);
+    if (!under)  // Blend starts from the deciding fragment's colour, or the background
+      pixels([&](size_t idx, size_t) { frame.color[idx] = opaqueAt[idx] >= 0 ? colors[size_t(opaqueAt[idx])] : options.background; });
+    for (uint32_t k : bins[tile]) {
+      const SetupTriangle t = clippedTo(clear[k], x0, y0, x1, y1);
+      if (t.minX > t.maxX || t.minY > t.maxY) continue;
+      const int64_t at = clearAt[k];
+      const Rgba8 src = colors[at];
+      rasterizeHalfSpace(t, [&](int x, int y, double) {
+        const size_t idx = frame.index(x, y);
+        const int64_t deciding = opaqueAt[idx];
+        if (!under) {
+          if (at < deciding) return;  // hidden by a later opaque fragment
+          frame.color[idx] = over(src, frame.color[idx]);
+        } else {
+          UnderSum& sum = sums[size_t(y - y0) * kBinTile + size_t(x - x0)];
+          if ((deciding >= 0 && at > deciding) || sum.through == 0) return;  // behind what is opaque
+          sum.addUnder(src);
+        }
+        ++composited[tile];
+      });
+    }
+    if (under)  // the deciding fragment under the transparent ones, then the background
+      pixels([&](size_t idx, size_t s) {
+        if (opaqueAt[idx] >= 0 && sums[s].through != 0) sums[s].addUnder(colors[size_t(opaqueAt[idx])]);
+        frame.color[idx] = sums[s].over(options.background);
+      });
+  });
+  frame.stats.addMemory("opaque_layer", decided.depth.size() * (sizeof(float) + sizeof(int32_t)));
+  frame.stats.addMemory("bins", binBytes(bins));
+  uint64_t writes = c.wins;
+  for (uint64_t n : composited) writes += n;
+  return writes;
+}
+
 // The frame's triangles through the tile kernel (DrawRaster::Tiled, TiledZBuffer::drawInOrder),
 // counted as the drawing service counts: a list-priority rule as "the first in a list wins" (the
 // drawing order under WhereUnwritten; reversed under Overwrite, whose last fragment wins), with
@@ -380,7 +457,6 @@ DrawRaster drawOnKernel(FrameWork& work, WriteRule rule, const Camera& camera, c
     drawOrdered(list, rule, DrawRaster::Binned, camera, options, shade, buffers, frame, work.counters, derived);
     return DrawRaster::Binned;
   }
-  if (rule == WriteRule::Overwrite) std::reverse(list.begin(), list.end());
   const bool color = has(options.outputs, FrameOutputs::Color);
   if (derived) {
     std::vector<uint32_t> originals(color ? list.size() : 0);
@@ -396,12 +472,19 @@ DrawRaster drawOnKernel(FrameWork& work, WriteRule rule, const Camera& camera, c
       for (size_t i = 0; i < list.size(); ++i) list[i].color = colors[i], list[i].frontFacing = true;
     }
   }
+  // Blending: the colours composited first (in the list's order); the ids and depths are the
+  // last fragment's (Blend, as Overwrite) or the first's (BlendUnder, as WhereUnwritten).
+  const bool blends = rule == WriteRule::Blend || rule == WriteRule::BlendUnder;
+  const uint64_t blended = blends && color ? blendOnKernel(list, rule, camera, options, shade, buffers, frame) : 0;
+  RenderOptions drawn = options;
+  if (blends) drawn.outputs = FrameOutputs(uint8_t(options.outputs) & ~uint8_t(FrameOutputs::Color));
+  if (rule == WriteRule::Overwrite || rule == WriteRule::Blend) std::reverse(list.begin(), list.end());
   const TiledZBuffer::InOrderCounts c =
-      buffers.tiled().drawInOrder(list, /*firstWins=*/!depthTest, camera, options, shade, frame);
+      buffers.tiled().drawInOrder(list, /*firstWins=*/!depthTest, camera, drawn, shade, frame);
   DrawCounters& n = work.counters;
   if (depthTest) n.depthTests = c.tests, n.depthWrites = c.wins;
   n.written = c.wins;
-  n.colorWrites = color ? c.wins : 0;
+  n.colorWrites = !color ? 0 : blends ? blended : c.wins;
   n.covered = c.covered;
   n.skippedFull = depthTest ? 0 : c.skippedPairs;
   frame.stats.addMemory("tiled_state", c.memoryBytes);
@@ -409,9 +492,11 @@ DrawRaster drawOnKernel(FrameWork& work, WriteRule rule, const Camera& camera, c
 }
 
 // Whether DrawRaster::Tiled draws `rule` (else the frame is drawn Binned): the depth test and
-// the list-priority rules. It does not count each pixel's writes: a frame that asks is refused.
+// the list-priority rules, blending or not. It does not count each pixel's writes: a frame that
+// asks is refused.
 bool kernelDraws(WriteRule rule, const Frame& frame) {
-  const bool draws = rule == WriteRule::DepthTest || rule == WriteRule::Overwrite || rule == WriteRule::WhereUnwritten;
+  const bool draws = rule == WriteRule::DepthTest || rule == WriteRule::Overwrite ||
+                     rule == WriteRule::WhereUnwritten || rule == WriteRule::Blend || rule == WriteRule::BlendUnder;
   if (draws && !frame.writes.empty())
     throw InputError(Setting::OverdrawImage, "",
                      "raster=tiled does not count writes per pixel (the tile kernel replaces whole blocks at once); "
@@ -606,7 +691,9 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
   if (raster == DrawRaster::Tiled && !kernelDraws(rule, frame)) raster = DrawRaster::Binned;
   const bool onKernel = raster == DrawRaster::Tiled;
   uint64_t meshesCulled = 0;
-  const bool keepsNearest = rule == WriteRule::DepthTest || exactOrder;  // (on the kernel: a rule it draws)
+  // (mesh culling hides what lies behind opaque meshes: not for the blending rules)
+  const bool blends = rule == WriteRule::Blend || rule == WriteRule::BlendUnder;
+  const bool keepsNearest = rule == WriteRule::DepthTest || (exactOrder && !blends);
   const std::vector<TriangleRange>* only =
       onKernel && keepsNearest ? unculledTriangles(scene, camera, options, derived, buffers, meshesCulled) : nullptr;
   drawFrame(scene, camera, options,

@@ -44,8 +44,8 @@ enum class DrawRaster : uint8_t {
   HalfSpace,  // the scalar half-space rasterizer over the whole frame, on one thread (the reference)
   Scanline,   // the lecture notes' scanline rasterizer, depth stepped by the plane equation, one thread
   Binned,     // the half-space rasterizer per 64x64 tile, tiles on threads (the same bits as HalfSpace)
-  Tiled,      // the z-buffer's SIMD tile kernel (TiledZBuffer::drawInOrder): DepthTest, Overwrite and
-              // WhereUnwritten, the same bits as HalfSpace; the other rules draw Binned
+  Tiled,      // the z-buffer's SIMD tile kernel (TiledZBuffer::drawInOrder): DepthTest, Overwrite,
+              // WhereUnwritten, Blend and BlendUnder, the same bits as HalfSpace; the others draw Binned
 };
 const char* drawRasterName(DrawRaster raster);
 /// The `raster` parameter of an algorithm that draws through the service (with `kernel`, drawScene
@@ -92,6 +92,8 @@ class DrawBuffers {
     std::vector<TriangleRange> only;  // the derived triangles of the meshes left after culling
   };
   FrameScratch& frameScratch() { return frameScratch_; }
+  /// DrawRaster::Tiled with blending: each pixel's deciding opaque fragment (its triangle ids).
+  Frame& opaqueLayer() { return opaqueLayer_; }
 
  private:
   // A depth buffer of each storage type.
@@ -120,6 +122,7 @@ class DrawBuffers {
   Layer drawn_, peeled_;
   std::unique_ptr<TiledZBuffer> tiled_;
   FrameScratch frameScratch_;
+  Frame opaqueLayer_;
 };
 
 /// The counters of the statistics, as every algorithm counts them.
