@@ -11,6 +11,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 #include <variant>
 #include <vector>
@@ -58,24 +59,63 @@ inline constexpr size_t kHugePageBytes = size_t(2) << 20;
 /// The allocator of Frame's buffers: memory aligned to a 64-byte cache line, so that the rows of
 /// an image whose width is a multiple of 16 pixels start on a cache line and the tiled rasterizer
 /// can write whole lines with streaming (non-temporal) stores; large buffers on huge pages
-/// (detail::allocateBuffer). Otherwise as std::allocator.
+/// (detail::allocateBuffer). Otherwise as std::allocator, except that it may lend the buffer
+/// memory the buffer does not own (lentBuffer): an allocation that fits takes it, its elements
+/// are left as they are (not zeroed), it is never freed, and a copy of the buffer allocates its own.
 template <class T>
 struct CacheLineAllocator {
   using value_type = T;
+  using propagate_on_container_move_assignment = std::true_type;
+  using propagate_on_container_swap = std::true_type;
+  using is_always_equal = std::false_type;
   CacheLineAllocator() = default;
+  CacheLineAllocator(T* lent, size_t count) noexcept : lent_(lent), count_(count) {}
   template <class U>
-  CacheLineAllocator(const CacheLineAllocator<U>&) noexcept {}
+  CacheLineAllocator(const CacheLineAllocator<U>&) noexcept {}  // (lends nothing)
   T* allocate(size_t n) {
+    if (lent_ && n <= count_) return lent_;
     if (n > std::numeric_limits<size_t>::max() / sizeof(T)) throw std::bad_array_new_length();
     return static_cast<T*>(detail::allocateBuffer(n * sizeof(T)));
   }
-  void deallocate(T* p, size_t n) noexcept { detail::freeBuffer(p, n * sizeof(T)); }
+  void deallocate(T* p, size_t n) noexcept {
+    if (!lent_ || p != lent_) detail::freeBuffer(p, n * sizeof(T));
+  }
+  /// Elements made without a value: value-initialized (zero) in memory of its own, left as they
+  /// are in lent memory.
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    if constexpr (sizeof...(Args) == 0) {
+      if (lent_) ::new (static_cast<void*>(p)) U;
+      else ::new (static_cast<void*>(p)) U();
+    } else {
+      ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+  }
+  CacheLineAllocator select_on_container_copy_construction() const noexcept { return {}; }
+  /// The memory it lends, or null.
+  T* lent() const noexcept { return lent_; }
   template <class U>
-  bool operator==(const CacheLineAllocator<U>&) const noexcept { return true; }
+  bool operator==(const CacheLineAllocator<U>& o) const noexcept {
+    return static_cast<const void*>(lent_) == static_cast<const void*>(o.lent());
+  }
+
+ private:
+  T* lent_ = nullptr;
+  size_t count_ = 0;
 };
 /// A frame buffer: a std::vector with cache-line aligned storage.
 template <class T>
 using FrameBuffer = std::vector<T, CacheLineAllocator<T>>;
+
+/// A buffer of `count` elements in `memory`, which it does not own: memory of the caller's (at
+/// least `count` elements, cache-line aligned, outliving the buffer) that a frame is then rendered
+/// straight into, its contents as they were. Grown past `count`, the buffer moves to memory of its own.
+template <class T>
+FrameBuffer<T> lentBuffer(T* memory, size_t count) {
+  FrameBuffer<T> buffer{CacheLineAllocator<T>(memory, count)};
+  buffer.resize(count);
+  return buffer;
+}
 
 /// A name with static storage, as Stats keeps its buffers' and details' names: a string literal
 /// (checked when compiled) or a name made at run time and interned for the program's life

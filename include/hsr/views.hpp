@@ -25,10 +25,14 @@ namespace hsr {
 using ViewSink = std::function<void(size_t view, const Frame& frame, int threads)>;
 void renderViews(const Scene& scene, std::span<const Camera> cameras, const RenderOptions& options,
                  const ViewSink& deliver);
+/// `target(i, frame)`, when given, is called before view i is rendered into `frame`, on the
+/// thread that renders it: it may lend the frame's buffers memory of the caller's (lentBuffer),
+/// so that the view is rendered straight into it.
+using ViewTarget = std::function<void(size_t view, Frame& frame)>;
 /// The same with frames the caller keeps from call to call (no buffers allocated once warm):
 /// `frames` is resized to the frames the views need, one per thread rendering whole views.
 void renderViews(const Scene& scene, std::span<const Camera> cameras, const RenderOptions& options,
-                 const ViewSink& deliver, std::vector<Frame>& frames);
+                 const ViewSink& deliver, std::vector<Frame>& frames, const ViewTarget& target = {});
 
 /// For each face of `scene`, the index of the mesh (Scene::meshes) it belongs to.
 std::vector<int32_t> faceMeshIndices(const Scene& scene);

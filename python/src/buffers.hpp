@@ -63,7 +63,7 @@ class BufferPool {
   void give(T&& buffer) {
     static_assert(!std::is_lvalue_reference_v<T>);
     const size_t bytes = bytesOf(buffer);
-    if (bytes == 0 || bytes > maxBytes_) return;  // freed by the caller
+    if (bytes == 0 || bytes > maxBytes_ || lends(buffer)) return;  // freed (or dropped) by the caller
     std::vector<Entry> evicted;                   // freed outside the lock
     std::lock_guard lock(m_);
     while (!kept_.empty() && (kept_.size() >= kMaxEntries || bytes_ + bytes > maxBytes_)) {
@@ -98,6 +98,10 @@ class BufferPool {
     maxBytes_ = memory > 0 ? std::min(kMaxBytesCap, size_t(memory / 8)) : size_t(64) << 20;
   }
   static size_t bytesOf(const RawBlock& b) { return b.capacity(); }
+  // (a buffer lent memory of an array's: never kept)
+  static bool lends(const RawBlock&) { return false; }
+  template <class T>
+  static bool lends(const hsr::FrameBuffer<T>& b) { return b.get_allocator().lent() != nullptr; }
   template <class T>
   static size_t bytesOf(const hsr::FrameBuffer<T>& b) { return b.capacity() * sizeof(T); }
   static size_t bytesOf(const Entry& e) { return std::visit([](const auto& b) { return bytesOf(b); }, e); }

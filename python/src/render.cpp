@@ -10,9 +10,11 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <algorithm>
 #include <cstring>
 #include <thread>
+#include <utility>
 
 namespace hsrpy {
 
@@ -172,10 +174,30 @@ void resolveAttributes(const SceneData& d, const hsr::Camera& camera, const hsr:
   if (float* p = out.at<float>(Normal, view)) hsr::resolveNormals(d.normals(), frame, p, threads);
 }
 
-// The frame's own buffers, copied into the blocks of view `view` (batches).
+// Whether view after view of output o lies in its block on a cache line, as the frame's buffers
+// do (the tile kernel writes whole lines with streaming stores): then the frame is lent it.
+bool lendable(const Blocks& out, Output o) {
+  const size_t viewBytes = out.pixels * kOutputs[o].channels * kOutputs[o].bytes;
+  return out.block[o].data() && reinterpret_cast<uintptr_t>(out.block[o].data()) % 64 == 0 && viewBytes % 64 == 0;
+}
+
+// The frame's buffers lent the blocks of view `view`, where lendable (batches): the view is
+// rendered straight into the arrays.
+void lendFrame(hsr::Frame& frame, const Blocks& out, size_t view) {
+  auto lend = [&]<class T>(hsr::FrameBuffer<T>& buffer, Output o) {
+    if (lendable(out, o)) BufferPool::instance().give(std::exchange(buffer, hsr::lentBuffer(out.at<T>(o, view), out.pixels)));
+  };
+  lend(frame.depth, Depth);
+  lend(frame.faceId, FaceId);
+  lend(frame.triangleId, TriangleId);
+  lend(frame.color, Color);
+}
+
+// The frame's buffers not rendered straight into the blocks of view `view`, copied there.
 void copyFrame(const hsr::Frame& frame, const Blocks& out, size_t view) {
   auto copy = [&](Output o, const void* from) {
-    if (void* to = out.at<uint8_t>(o, view)) std::memcpy(to, from, out.pixels * kOutputs[o].channels * kOutputs[o].bytes);
+    void* to = out.at<uint8_t>(o, view);
+    if (to && to != from) std::memcpy(to, from, out.pixels * kOutputs[o].channels * kOutputs[o].bytes);
   };
   copy(Depth, frame.depth.data());
   copy(FaceId, frame.faceId.data());
@@ -204,7 +226,7 @@ hsr::Frame pooledFrame(const hsr::Camera& camera, hsr::FrameOutputs outputs) {
   return frame;
 }
 
-// The frame's buffers back to the pool.
+// The frame's buffers back to the pool (lent ones are dropped: BufferPool::give).
 void releaseFrame(hsr::Frame& frame) {
   BufferPool& pool = BufferPool::instance();
   pool.give(std::move(frame.depth));
@@ -301,7 +323,7 @@ py::dict renderBatch(const SceneData& d, const std::vector<hsr::Camera>& cameras
           resolveAttributes(d, cameras[view], frame, blocks, view, threads);
           if (!visibility.empty()) visibility[view] = visibilityOf(d, cameras[view], options, frame, threads);
         },
-        frames);
+        frames, [&](size_t view, hsr::Frame& frame) { lendFrame(frame, blocks, view); });
     for (hsr::Frame& f : frames) releaseFrame(f);
   }
   const std::vector<py::ssize_t> image{py::ssize_t(cameras.size()), cameras[0].height, cameras[0].width};

@@ -92,19 +92,22 @@ def test_opencv_pose_as_R_t_and_batch_of_poses():
     assert np.array_equal(a["face_id"], b["face_id"]) and a["depth"].tobytes() == b["depth"].tobytes()
 
 
+# 160x120: views rendered straight into the batch's arrays (a view's pixels fill whole cache
+# lines); 161x121: rendered in the module's frames and copied there.
 @pytest.mark.parametrize("threads", [1, 2, 3])
-def test_batch_equals_views_one_by_one(cubes, threads):
+@pytest.mark.parametrize("size", [(160, 120), (161, 121)])
+def test_batch_equals_views_one_by_one(cubes, threads, size):
     rng = np.random.default_rng(7)
-    cams = [opencv_camera(pose=random_pose(rng, 5 + i)) for i in range(5)]
+    cams = [opencv_camera(*size, pose=random_pose(rng, 5 + i)) for i in range(5)]
     batch = hsr.render(cubes, cams, outputs=ALL, threads=threads)
     for name in ALL:
-        assert batch[name].shape[:3] == (5, 120, 160)
+        assert batch[name].shape[:3] == (5, size[1], size[0])
     for i, cam in enumerate(cams):
         one = hsr.render(cubes, cam, outputs=ALL)
         for name in ALL:
             assert one[name].tobytes() == batch[name][i].tobytes(), (name, i)
     single = hsr.render(cubes, [cams[0]], outputs=ALL)  # a list of one is a batch of one
-    assert single["depth"].shape == (1, 120, 160)
+    assert single["depth"].shape == (1, size[1], size[0])
 
 
 def test_barycentrics_reconstruct_the_pixel_centre():

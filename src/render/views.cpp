@@ -56,12 +56,13 @@ void renderViews(const Scene& scene, std::span<const Camera> cameras, const Rend
 }
 
 void renderViews(const Scene& scene, std::span<const Camera> cameras, const RenderOptions& options,
-                 const ViewSink& deliver, std::vector<Frame>& frames) {
+                 const ViewSink& deliver, std::vector<Frame>& frames, const ViewTarget& target) {
   const int threads = resolveThreads(options.threads);
   if (cameras.size() < size_t(threads) || threads == 1) {
     frames.resize(1);  // one after another, each view on every thread
     Renderer renderer(scene, options);  // one algorithm object for every view
     for (size_t i = 0; i < cameras.size(); ++i) {
+      if (target) target(i, frames[0]);
       renderer.render(cameras[i], frames[0]);
       deliver(i, frames[0], threads);
     }
@@ -79,6 +80,7 @@ void renderViews(const Scene& scene, std::span<const Camera> cameras, const Rend
       const size_t part = currentPart();
       Frame& frame = frames[part];
       if (!renderers[part]) renderers[part].emplace(scene, single);
+      if (target) target(i, frame);
       renderers[part]->render(cameras[i], frame);
       deliver(i, frame, 1);
     } catch (...) {
