@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 
 #include "test_scenes.hpp"
@@ -61,6 +62,65 @@ TEST(RenderViews, FramesKeptByTheCallerGiveTheSameBits) {
         frames);
     EXPECT_EQ(frames.size(), size_t(threads) > cameras.size() ? 1u : size_t(threads));
   }
+}
+
+// A frame lent memory of the caller's (ViewTarget, lentBuffer) is rendered straight into it, with
+// the bits of rendering the view alone, on every algorithm the views run.
+TEST(RenderViews, ViewsRenderStraightIntoLentMemory) {
+  const Scene scene = test::boxesScene();
+  const std::vector<Camera> cameras = orbit(scene, 5, 64, 48);
+  const size_t pixels = 64 * 48;
+  for (const char* algorithm : {"zbuffer", "painter", "reverse-painter", "raycast"})
+    for (int threads : {1, 2}) {
+      RenderOptions options;
+      options.threads = threads;
+      options.algorithm = algorithm;
+      FrameBuffer<float> depth(cameras.size() * pixels, -1.0f);  // (cache-line aligned, as views' slices)
+      FrameBuffer<Rgba8> color(cameras.size() * pixels);
+      std::vector<Frame> frames;
+      renderViews(
+          scene, cameras, options,
+          [&](size_t i, const Frame& frame, int) {
+            EXPECT_EQ(frame.depth.data(), depth.data() + i * pixels) << algorithm;
+            EXPECT_EQ(frame.color.data(), color.data() + i * pixels) << algorithm;
+          },
+          frames,
+          [&](size_t i, Frame& frame) {
+            frame.depth = lentBuffer(depth.data() + i * pixels, pixels);
+            frame.color = lentBuffer(color.data() + i * pixels, pixels);
+          });
+      for (size_t i = 0; i < cameras.size(); ++i) {
+        const Frame alone = render(scene, cameras[i], options);
+        EXPECT_TRUE(std::equal(alone.depth.begin(), alone.depth.end(), depth.begin() + ptrdiff_t(i * pixels)))
+            << algorithm << " view " << i;
+        EXPECT_TRUE(std::equal(alone.color.begin(), alone.color.end(), color.begin() + ptrdiff_t(i * pixels)))
+            << algorithm << " view " << i;
+      }
+    }
+}
+
+// A lent buffer keeps the memory's contents, never frees it, moves to memory of its own when it
+// grows past it, and its copies own their memory.
+TEST(RenderViews, LentBuffersBorrowAndNeverFree) {
+  std::vector<int32_t> memory(32, 7);
+  FrameBuffer<int32_t> lent = lentBuffer(memory.data(), 16);
+  EXPECT_EQ(lent.data(), memory.data());
+  EXPECT_EQ(lent.size(), 16u);
+  EXPECT_EQ(lent[15], 7);  // not zeroed
+  const FrameBuffer<int32_t> copy = lent;
+  EXPECT_NE(copy.data(), memory.data());
+  EXPECT_EQ(copy.get_allocator().lent(), nullptr);
+  lent.resize(8);
+  lent.resize(16);
+  EXPECT_EQ(lent.data(), memory.data());
+  lent[0] = 3;
+  EXPECT_EQ(memory[0], 3);
+  lent.resize(17);  // past the memory: its own now, the elements carried over
+  EXPECT_NE(lent.data(), memory.data());
+  EXPECT_EQ(lent[0], 3);
+  EXPECT_EQ(lent[16], 0);  // (its own memory: new elements are zeroed)
+  FrameBuffer<int32_t> own(4);
+  EXPECT_EQ(own[3], 0);
 }
 
 TEST(RenderViews, TheFirstErrorReachesTheCaller) {

@@ -5,6 +5,7 @@
 #include <hsr/common.hpp>
 
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <new>
@@ -85,7 +86,7 @@ struct CacheLineAllocator {
   template <class U, class... Args>
   void construct(U* p, Args&&... args) {
     if constexpr (sizeof...(Args) == 0) {
-      if (lent_) ::new (static_cast<void*>(p)) U;
+      if (inLent(p)) ::new (static_cast<void*>(p)) U;
       else ::new (static_cast<void*>(p)) U();
     } else {
       ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
@@ -100,6 +101,10 @@ struct CacheLineAllocator {
   }
 
  private:
+  bool inLent(const void* p) const noexcept {
+    const uintptr_t at = reinterpret_cast<uintptr_t>(p), first = reinterpret_cast<uintptr_t>(lent_);
+    return lent_ && at >= first && at < first + count_ * sizeof(T);
+  }
   T* lent_ = nullptr;
   size_t count_ = 0;
 };

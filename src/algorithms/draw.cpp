@@ -38,9 +38,10 @@ struct UnderSum {
     b += w * src.b;
     through = src.a == 255 ? 0.0f : through * (1 - src.a / 255.0f);
   }
-  // The pixel over an opaque background, rounded once to 8 bits.
+  // The pixel over an opaque background, rounded once to 8 bits (half away from zero, as
+  // std::lround: v is never negative, and v + 0.5 is exact in double).
   Rgba8 over(Rgba8 background) const {
-    auto byte = [](float v) { return uint8_t(std::clamp(std::lround(v), 0l, 255l)); };
+    auto byte = [](float v) { return uint8_t(std::clamp(std::floor(double(v) + 0.5), 0.0, 255.0)); };
     return {byte(r + through * background.r), byte(g + through * background.g), byte(b + through * background.b),
             255};
   }
@@ -602,8 +603,8 @@ ParamSpec drawRasterParam(const char* defaultValue, bool kernel) {
   return {"raster", ParamType::Choice, defaultValue, {"halfspace", "scanline", "binned", "tiled"}, -1e300, 1e300,
           "fragments from the scalar half-space rasterizer on one thread (the reference), the lecture notes' "
           "scanline rasterizer, the half-space rasterizer binned into 64x64 tiles on threads, or the z-buffer's "
-          "SIMD tile kernel: the same image, the first fragment in priority order winning each pixel (transparent "
-          "scenes draw binned; no overdraw picture)"};
+          "SIMD tile kernel: the same image, the first fragment in priority order winning each pixel (the "
+          "sorted z-buffer's transparent pass draws binned; no overdraw picture)"};
 }
 
 DrawRaster drawRasterOf(const AlgorithmParams& params) {
