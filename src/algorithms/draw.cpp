@@ -692,11 +692,13 @@ void drawScene(const Scene& scene, const Camera& camera, const RenderOptions& op
   if (raster == DrawRaster::Tiled && !kernelDraws(rule, frame)) raster = DrawRaster::Binned;
   const bool onKernel = raster == DrawRaster::Tiled;
   uint64_t meshesCulled = 0;
+  Timer culling;
   // (mesh culling hides what lies behind opaque meshes: not for the blending rules)
   const bool blends = rule == WriteRule::Blend || rule == WriteRule::BlendUnder;
   const bool keepsNearest = rule == WriteRule::DepthTest || (exactOrder && !blends);
   const std::vector<TriangleRange>* only =
       onKernel && keepsNearest ? unculledTriangles(scene, camera, options, derived, buffers, meshesCulled) : nullptr;
+  if (only) frame.stats.addTime("cull", culling.ms());
   drawFrame(scene, camera, options,
             {.order = order, .depthTested = depthTested, .clearFrame = !onKernel, .derived = derived,
              .buffers = &buffers, .only = only},
