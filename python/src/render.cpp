@@ -185,7 +185,8 @@ bool lendable(const Blocks& out, Output o) {
 // rendered straight into the arrays.
 void lendFrame(hsr::Frame& frame, const Blocks& out, size_t view) {
   auto lend = [&]<class T>(hsr::FrameBuffer<T>& buffer, Output o) {
-    if (lendable(out, o)) BufferPool::instance().give(std::exchange(buffer, hsr::lentBuffer(out.at<T>(o, view), out.pixels)));
+    if (!lendable(out, o)) return;
+    BufferPool::instance().give(std::exchange(buffer, hsr::lentBuffer(out.at<T>(o, view), out.pixels)));
   };
   lend(frame.depth, Depth);
   lend(frame.faceId, FaceId);

@@ -395,7 +395,8 @@ uint64_t blendOnKernel(std::span<const SetupTriangle> list, WriteRule rule, cons
   decided.allocate(camera.width, camera.height, FrameOutputs::TriangleIds);
   RenderOptions idsOnly = options;
   idsOnly.outputs = FrameOutputs::TriangleIds;
-  const TiledZBuffer::InOrderCounts c = buffers.tiled().drawInOrder(opaque, /*firstWins=*/true, camera, idsOnly, shade, decided);
+  const TiledZBuffer::InOrderCounts c =
+      buffers.tiled().drawInOrder(opaque, /*firstWins=*/true, camera, idsOnly, shade, decided);
   const std::span<const int32_t> opaqueAt(decided.triangleId);
 
   // 2. The transparent fragments that still show, tile by tile.
@@ -411,7 +412,9 @@ uint64_t blendOnKernel(std::span<const SetupTriangle> list, WriteRule rule, cons
     };
     std::vector<UnderSum> sums(under ? size_t(kBinTile) * kBinTile : 0);
     if (!under)  // Blend starts from the deciding fragment's colour, or the background
-      pixels([&](size_t idx, size_t) { frame.color[idx] = opaqueAt[idx] >= 0 ? colors[size_t(opaqueAt[idx])] : options.background; });
+      pixels([&](size_t idx, size_t) {
+        frame.color[idx] = opaqueAt[idx] >= 0 ? colors[size_t(opaqueAt[idx])] : options.background;
+      });
     for (uint32_t k : bins[tile]) {
       const SetupTriangle t = clippedTo(clear[k], x0, y0, x1, y1);
       if (t.minX > t.maxX || t.minY > t.maxY) continue;
@@ -446,9 +449,10 @@ uint64_t blendOnKernel(std::span<const SetupTriangle> list, WriteRule rule, cons
 
 // The frame's triangles through the tile kernel (DrawRaster::Tiled, TiledZBuffer::drawInOrder),
 // counted as the drawing service counts: a list-priority rule as "the first in a list wins" (the
-// drawing order under WhereUnwritten; reversed under Overwrite, whose last fragment wins), with
-// the scene's ids and colours when the triangles are derived geometry. Returns the rasterizer
-// that drew: Binned for a list longer than the priority keys.
+// drawing order under WhereUnwritten; reversed under Overwrite, whose last fragment wins; Blend's
+// and BlendUnder's ids and depths as theirs, their colours by blendOnKernel), with the scene's ids
+// and colours when the triangles are derived geometry. Returns the rasterizer that drew: Binned
+// for a list longer than the priority keys.
 DrawRaster drawOnKernel(FrameWork& work, WriteRule rule, const Camera& camera, const RenderOptions& options,
                   const TriangleShader& shade, const DerivedScene* derived, DrawBuffers& buffers, Frame& frame) {
   std::vector<SetupTriangle>& list = work.triangles;
