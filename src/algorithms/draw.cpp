@@ -292,6 +292,26 @@ class FragmentWriter {
   std::vector<Rgba8> colors_;  // per triangle: its colour (shadeTriangles)
 };
 
+// The Binned rasterizer's tiles of the camera's frame, row by row.
+size_t binnedTiles(const Camera& cam) {
+  return size_t((cam.width + kBinTile - 1) / kBinTile) * size_t((cam.height + kBinTile - 1) / kBinTile);
+}
+
+// The triangles binned into the Binned rasterizer's tiles (binByCell), and fn(tile, x0, y0, x1,
+// y1, bin) for each tile on up to `threads` threads of the pool: its pixels [x0, x1] x [y0, y1],
+// which are its own, and its triangles in drawing order. Returns the bins' bytes.
+template <class Fn>
+uint64_t forEachBinnedTile(std::span<const SetupTriangle> tris, const Camera& cam, int threads, Fn&& fn) {
+  const int tilesX = (cam.width + kBinTile - 1) / kBinTile, tilesY = (cam.height + kBinTile - 1) / kBinTile;
+  const std::vector<std::vector<uint32_t>> bins = binByCell(tris, kBinTile, kBinTile, tilesX, tilesY);
+  parallelFor(0, bins.size(), threads, [&](size_t tile) {
+    const int x0 = int(tile % size_t(tilesX)) * kBinTile, y0 = int(tile / size_t(tilesX)) * kBinTile;
+    const int x1 = std::min(x0 + kBinTile, cam.width) - 1, y1 = std::min(y0 + kBinTile, cam.height) - 1;
+    fn(tile, x0, y0, x1, y1, std::span<const uint32_t>(bins[tile]));
+  });
+  return binBytes(bins);
+}
+
 // The frame drawn and resolved by one writer: on one thread over the whole image, or binned,
 // tile by tile on the pool (each tile's pixels are its own; counters summed in tile order).
 template <class R, DepthStorage S, DepthMapping M>
@@ -318,28 +338,25 @@ void drawWith(std::span<const SetupTriangle> tris, DrawRaster raster, const Came
     writer.addMemory(frame.stats);
     return;
   }
-  const int tilesX = (cam.width + kBinTile - 1) / kBinTile, tilesY = (cam.height + kBinTile - 1) / kBinTile;
-  const std::vector<std::vector<uint32_t>> bins = binByCell(tris, kBinTile, kBinTile, tilesX, tilesY);
-  std::vector<DrawCounters> perTile(bins.size());
-  parallelFor(0, bins.size(), threads, [&](size_t tile) {
-    const int x0 = int(tile % size_t(tilesX)) * kBinTile, y0 = int(tile / size_t(tilesX)) * kBinTile;
-    const int x1 = std::min(x0 + kBinTile, cam.width) - 1, y1 = std::min(y0 + kBinTile, cam.height) - 1;
-    const uint64_t pixels = uint64_t(x1 - x0 + 1) * uint64_t(y1 - y0 + 1);
-    for (size_t k = 0; k < bins[tile].size(); ++k) {
-      if (full(perTile[tile], pixels)) {
-        perTile[tile].skippedFull += bins[tile].size() - k;
-        break;
-      }
-      writer.draw(bins[tile][k], DrawRaster::HalfSpace, x0, y0, x1, y1, perTile[tile]);
-    }
-  });
+  std::vector<DrawCounters> perTile(binnedTiles(cam));
+  const uint64_t binsBytes = forEachBinnedTile(
+      tris, cam, threads, [&](size_t tile, int x0, int y0, int x1, int y1, std::span<const uint32_t> bin) {
+        const uint64_t pixels = uint64_t(x1 - x0 + 1) * uint64_t(y1 - y0 + 1);
+        for (size_t k = 0; k < bin.size(); ++k) {
+          if (full(perTile[tile], pixels)) {
+            perTile[tile].skippedFull += bin.size() - k;
+            break;
+          }
+          writer.draw(bin[k], DrawRaster::HalfSpace, x0, y0, x1, y1, perTile[tile]);
+        }
+      });
   writer.shadeTriangles(threads);
   std::vector<DrawCounters> perRow(size_t(cam.height));
   parallelFor(0, size_t(cam.height), threads, [&](size_t y) { writer.resolveRows(int(y), int(y) + 1, perRow[y]); });
   for (const DrawCounters& c : perTile) counters.add(c);
   for (const DrawCounters& c : perRow) counters.add(c);
   writer.addMemory(frame.stats);
-  frame.stats.addMemory("bins", binBytes(bins));
+  frame.stats.addMemory("bins", binsBytes);
 }
 
 // The triangles drawn in their order under `rule` into the cleared frame, counted into
@@ -400,12 +417,8 @@ uint64_t blendOnKernel(std::span<const SetupTriangle> list, WriteRule rule, cons
   const std::span<const int32_t> opaqueAt(decided.triangleId);
 
   // 2. The transparent fragments that still show, tile by tile.
-  const int tilesX = (camera.width + kBinTile - 1) / kBinTile, tilesY = (camera.height + kBinTile - 1) / kBinTile;
-  const std::vector<std::vector<uint32_t>> bins = binByCell(clear, kBinTile, kBinTile, tilesX, tilesY);
-  std::vector<uint64_t> composited(bins.size(), 0);
-  parallelFor(0, bins.size(), resolveThreads(options.threads), [&](size_t tile) {
-    const int x0 = int(tile % size_t(tilesX)) * kBinTile, y0 = int(tile / size_t(tilesX)) * kBinTile;
-    const int x1 = std::min(x0 + kBinTile, camera.width) - 1, y1 = std::min(y0 + kBinTile, camera.height) - 1;
+  std::vector<uint64_t> composited(binnedTiles(camera), 0);
+  auto composite = [&](size_t tile, int x0, int y0, int x1, int y1, std::span<const uint32_t> bin) {
     auto pixels = [&](auto&& visit) {
       for (int y = y0; y <= y1; ++y)
         for (int x = x0; x <= x1; ++x) visit(frame.index(x, y), size_t(y - y0) * kBinTile + size_t(x - x0));
@@ -415,7 +428,7 @@ uint64_t blendOnKernel(std::span<const SetupTriangle> list, WriteRule rule, cons
       pixels([&](size_t idx, size_t) {
         frame.color[idx] = opaqueAt[idx] >= 0 ? colors[size_t(opaqueAt[idx])] : options.background;
       });
-    for (uint32_t k : bins[tile]) {
+    for (uint32_t k : bin) {
       const SetupTriangle t = clippedTo(clear[k], x0, y0, x1, y1);
       if (t.minX > t.maxX || t.minY > t.maxY) continue;
       const int64_t at = clearAt[k];
@@ -439,9 +452,10 @@ uint64_t blendOnKernel(std::span<const SetupTriangle> list, WriteRule rule, cons
         if (opaqueAt[idx] >= 0 && sums[s].through != 0) sums[s].addUnder(colors[size_t(opaqueAt[idx])]);
         frame.color[idx] = sums[s].over(options.background);
       });
-  });
+  };
+  const uint64_t binsBytes = forEachBinnedTile(clear, camera, resolveThreads(options.threads), composite);
   frame.stats.addMemory("opaque_layer", decided.depth.size() * (sizeof(float) + sizeof(int32_t)));
-  frame.stats.addMemory("bins", binBytes(bins));
+  frame.stats.addMemory("bins", binsBytes);
   uint64_t writes = c.wins;
   for (uint64_t n : composited) writes += n;
   return writes;
